@@ -1,0 +1,75 @@
+// FCL collision and clearance queries for a Scene. The only folder that includes FCL headers.
+//
+// CollisionWorld holds the immutable geometry (OBBRSS BVH meshes, primitives, a broad-phase
+// structure over the obstacles) and is shared read-only between threads. Each worker thread
+// makes its own CollisionContext, which holds the mutable per-query state (robot body poses).
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+
+#include "core/scene/scene.h"
+#include "core/space/space.h"
+
+namespace hgraph {
+
+class CollisionContext;
+
+// Immutable after construction; thread safe. Not copyable or movable (contexts point into it).
+class CollisionWorld {
+ public:
+  // Builds the BVHs. Throws InputError if the scene is invalid (see ValidateScene).
+  explicit CollisionWorld(std::shared_ptr<const Scene> scene);
+  ~CollisionWorld();
+  CollisionWorld(const CollisionWorld&) = delete;
+  CollisionWorld& operator=(const CollisionWorld&) = delete;
+
+  const Scene& scene() const { return *scene_; }
+  const Space& space() const { return scene_->space; }
+
+  // Makes a query context for one thread.
+  std::unique_ptr<CollisionContext> MakeContext() const;
+
+  // Largest distance from the origin of body i's driving frame to any point of the body: bounds
+  // how far a body point moves when the frame turns (core/motion's clearance certificate).
+  double BodyRadius(int body) const;
+
+  // Approximate memory held by the geometry, in bytes (for cache budgets).
+  size_t memory_bytes() const;
+
+  struct Impl;
+  const Impl& impl() const { return *impl_; }
+
+ private:
+  std::shared_ptr<const Scene> scene_;
+  std::unique_ptr<Impl> impl_;
+};
+
+// Per-thread query state. Not thread safe; not copyable.
+class CollisionContext {
+ public:
+  explicit CollisionContext(const CollisionWorld& world);
+  ~CollisionContext();
+  CollisionContext(const CollisionContext&) = delete;
+  CollisionContext& operator=(const CollisionContext&) = delete;
+
+  // True if q is within the bounds and no robot body touches an obstacle (or, with
+  // self-collision on, another body). Counts one collision check.
+  bool Valid(const Config& q);
+  // Minimum distance from the robot to the obstacles (and between bodies with self-collision
+  // on); 0 when in collision or out of bounds. Counts one distance query.
+  double Clearance(const Config& q);
+
+  int64_t collision_checks() const { return collision_checks_; }
+  int64_t distance_queries() const { return distance_queries_; }
+
+ private:
+  struct Impl;
+  const CollisionWorld& world_;
+  std::unique_ptr<Impl> impl_;
+  int64_t collision_checks_ = 0;
+  int64_t distance_queries_ = 0;
+};
+
+}  // namespace hgraph

@@ -1,0 +1,56 @@
+// Bridge-candidate strategies (paper, "H-Graph Variants"): which pairs of nodes the local planner
+// is asked to connect.
+#pragma once
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/hgraph/hgraph.h"
+
+namespace hgraph {
+
+enum class Variant {
+  kAllPairs,                  // every pair of nodes, between and within paths
+  kNeighborhood,              // pairs closer than radius D
+  kKNearest,                  // each node to its phi nearest nodes
+  kEditDistance,              // gaps and matches of the alignment of each pair of paths
+  kEditDistanceNeighborhood,  // edit-distance pairs closer than radius D
+};
+
+// "all-pairs", "neighborhood", "knn", "edit-distance", "edit-distance-neighborhood".
+const char* VariantName(Variant variant);
+// Parses the names above; throws InputError naming `field` otherwise.
+Variant ParseVariant(const std::string& name, const std::string& field);
+
+struct CandidateOptions {
+  Variant variant = Variant::kEditDistance;
+  // Neighbourhood threshold D; <= 0 means 2 x the mean input edge length.
+  double radius = -1;
+  // Neighbours per node (k-nearest); >= 1.
+  int phi = 5;
+  // Alignment gap penalties; < 0 means GAP_ext = mean input edge length, GAP_init = 2 x GAP_ext.
+  double gap_init = -1;
+  double gap_extend = -1;
+};
+
+// Throws InputError naming "options.<field>" for a bad value (negative radius given explicitly
+// is caught by the caller before the auto rule applies; phi < 1).
+void ValidateCandidateOptions(const CandidateOptions& options);
+
+// Node pairs (u < v) to check, in a deterministic order, without pairs already joined by an
+// edge and without duplicates. Also returns the parameters actually used.
+struct CandidateSet {
+  std::vector<std::pair<int, int>> pairs;
+  double radius = 0;
+  double gap_init = 0;
+  double gap_extend = 0;
+  int alignments = 0;  // pairs of paths aligned (edit-distance variants)
+};
+CandidateSet BridgeCandidates(const HGraph& graph, const Space& space,
+                              const CandidateOptions& options);
+
+// Mean length of the input edges of the graph (the scale of the automatic parameters).
+double MeanInputEdgeLength(const HGraph& graph, const Space& space);
+
+}  // namespace hgraph

@@ -1,0 +1,79 @@
+// The Hybridization Graph (paper, "Hybridization Graph between Multiple Motion Paths"): the
+// union of the input paths (start and goal shared), plus bridge edges between and within paths.
+// Edges keep their local-planner report, never a cost for one measure, so a stored H-Graph can be
+// searched again under any measure.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/motion/motion_checker.h"
+#include "core/space/space.h"
+
+namespace hgraph {
+
+// A discrete input path. Plain struct; copyable.
+struct InputPath {
+  std::string name;
+  std::vector<Config> waypoints;
+};
+
+// A node: a configuration and where it came from. The shared start and goal come from path 0.
+struct HNode {
+  Config q;
+  int path = 0;
+  int index = 0;
+};
+
+// An edge and what the local planner found about it (state kUnchecked until checked).
+struct HEdge {
+  int u = 0;
+  int v = 0;
+  bool input = false;  // an edge of an input path (else a bridge)
+  EdgeReport report;
+};
+
+// Copyable and movable; not thread safe for writes (edges are filled in by the builder, which
+// writes each edge's report from exactly one worker).
+class HGraph {
+ public:
+  // Validates every waypoint against the space (InputError naming "paths[i].waypoints[j]"),
+  // requires at least one path of at least two waypoints, and shared endpoints: a path whose
+  // first (last) waypoint is farther than endpoint_tolerance from path 0's is rejected with an
+  // InputError naming it. Quaternions are normalised. Adds every input edge, unchecked.
+  HGraph(const Space& space, std::vector<InputPath> paths, double endpoint_tolerance);
+
+  int num_nodes() const { return static_cast<int>(nodes_.size()); }
+  int num_edges() const { return static_cast<int>(edges_.size()); }
+  int num_paths() const { return static_cast<int>(paths_.size()); }
+  const HNode& node(int i) const { return nodes_[i]; }
+  const HEdge& edge(int i) const { return edges_[i]; }
+  HEdge& mutable_edge(int i) { return edges_[i]; }
+  const InputPath& path(int p) const { return paths_[p]; }
+  // Node ids along input path p, from the start node to the goal node.
+  const std::vector<int>& path_nodes(int p) const { return path_nodes_[p]; }
+  // Edge ids along input path p.
+  const std::vector<int>& path_edges(int p) const { return path_edges_[p]; }
+  int start() const { return 0; }
+  int goal() const { return 1; }
+  // (neighbour, edge id) pairs of node i.
+  const std::vector<std::pair<int, int>>& neighbours(int i) const { return adjacency_[i]; }
+
+  // Adds an undirected edge and returns its id; returns the existing edge's id if u and v are
+  // already joined (an input edge stays an input edge). Requires u != v.
+  int AddEdge(int u, int v, bool input);
+  // The id of the edge joining u and v, or -1.
+  int FindEdge(int u, int v) const;
+
+ private:
+  std::vector<InputPath> paths_;
+  std::vector<HNode> nodes_;
+  std::vector<HEdge> edges_;
+  std::vector<std::vector<int>> path_nodes_;
+  std::vector<std::vector<int>> path_edges_;
+  std::vector<std::vector<std::pair<int, int>>> adjacency_;
+};
+
+}  // namespace hgraph

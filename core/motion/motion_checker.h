@@ -1,0 +1,59 @@
+// The local planner's interface, as the H-Graph and the search see it (never FCL).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "core/space/space.h"
+
+namespace hgraph {
+
+// State of an edge in the H-Graph. Unchecked edges exist for the lazy variant, which checks an
+// edge only when a search wants it.
+enum class EdgeState { kUnchecked, kValid, kInvalid };
+
+// Clearance at parameter t in [0, 1] along a straight motion.
+struct ClearanceSample {
+  double t = 0;
+  double clearance = 0;
+};
+
+// What the local planner found about one straight motion. Stored on the H-Graph edge, so that
+// any measure can be evaluated later without checking again.
+struct EdgeReport {
+  EdgeState state = EdgeState::kUnchecked;
+  double length = 0;  // Space::Distance(from, to)
+  // Clearance at the checked samples, sorted by t, including t = 0 and t = 1. Present only when
+  // the check was asked for clearance (has_clearance) and the motion is valid.
+  bool has_clearance = false;
+  std::vector<ClearanceSample> profile;
+  double invalid_at = -1;  // parameter of the first invalid sample found, or -1
+  int64_t collision_checks = 0;
+  int64_t distance_queries = 0;
+};
+
+struct EdgeCheckRequest {
+  const Config* from = nullptr;
+  const Config* to = nullptr;
+  bool need_clearance = false;
+};
+
+// Checks straight motions. Implementations must be thread safe: the H-Graph calls CheckEdge
+// from many worker threads at once. Not copyable (polymorphic base).
+class MotionChecker {
+ public:
+  MotionChecker() = default;
+  MotionChecker(const MotionChecker&) = delete;
+  MotionChecker& operator=(const MotionChecker&) = delete;
+  virtual ~MotionChecker() = default;
+
+  virtual const Space& space() const = 0;
+  virtual EdgeReport CheckEdge(const EdgeCheckRequest& request) const = 0;
+  virtual bool IsValid(const Config& q) const = 0;
+  virtual double Clearance(const Config& q) const = 0;
+  // Totals over every query this checker ran so far (for progress and stats).
+  virtual int64_t total_collision_checks() const = 0;
+  virtual int64_t total_distance_queries() const = 0;
+};
+
+}  // namespace hgraph
