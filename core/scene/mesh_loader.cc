@@ -1,0 +1,130 @@
+#include "core/scene/mesh_loader.h"
+
+#include <assimp/Importer.hpp>
+#include <assimp/config.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <system_error>
+
+#include "core/common/error.h"
+
+namespace hgraph {
+namespace {
+
+// Triangles are all the collision checker understands; points and lines are dropped rather than
+// rejected so that a mesh with stray edges (common in exported CAD) still loads. Normals, texture
+// coordinates and colours are removed before joining, so that vertices are joined by position
+// alone (an STL cube otherwise keeps 24 vertices, one per face normal).
+constexpr unsigned kPostProcess = aiProcess_RemoveComponent | aiProcess_Triangulate |
+                                  aiProcess_JoinIdenticalVertices | aiProcess_SortByPType;
+
+void ConfigureImporter(Assimp::Importer& importer) {
+  importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+  importer.SetPropertyInteger(
+      AI_CONFIG_PP_RVC_FLAGS,
+      aiComponent_NORMALS | aiComponent_TANGENTS_AND_BITANGENTS | aiComponent_COLORS |
+          aiComponent_TEXCOORDS | aiComponent_BONEWEIGHTS | aiComponent_ANIMATIONS |
+          aiComponent_TEXTURES | aiComponent_LIGHTS | aiComponent_CAMERAS | aiComponent_MATERIALS);
+  // Robotics scenes are Z-up; assimp would otherwise rotate Z-up COLLADA files into Y-up and the
+  // obstacles would no longer match the coordinates written in the file.
+  importer.SetPropertyBool(AI_CONFIG_IMPORT_COLLADA_IGNORE_UP_DIRECTION, true);
+}
+
+void CheckScale(const MeshLoadOptions& options, const std::string& field) {
+  for (int k = 0; k < 3; ++k) {
+    if (!std::isfinite(options.scale[k]) || options.scale[k] <= 0) {
+      throw InputError(field, "mesh scale[" + std::to_string(k) +
+                                  "] must be positive and finite, got " +
+                                  std::to_string(options.scale[k]));
+    }
+  }
+}
+
+void AppendMesh(const aiMesh& in, const aiMatrix4x4& transform, const Eigen::Vector3d& scale,
+                Mesh& out) {
+  const size_t base = out.vertices.size();
+  for (unsigned k = 0; k < in.mNumVertices; ++k) {
+    const aiVector3D v = transform * in.mVertices[k];
+    out.vertices.emplace_back(scale.x() * v.x, scale.y() * v.y, scale.z() * v.z);
+  }
+  for (unsigned f = 0; f < in.mNumFaces; ++f) {
+    const aiFace& face = in.mFaces[f];
+    if (face.mNumIndices != 3) continue;
+    out.triangles.emplace_back(static_cast<int>(base + face.mIndices[0]),
+                               static_cast<int>(base + face.mIndices[1]),
+                               static_cast<int>(base + face.mIndices[2]));
+  }
+}
+
+void AppendNode(const aiScene& scene, const aiNode& node, const aiMatrix4x4& parent,
+                const Eigen::Vector3d& scale, Mesh& out) {
+  const aiMatrix4x4 transform = parent * node.mTransformation;
+  for (unsigned i = 0; i < node.mNumMeshes; ++i) {
+    AppendMesh(*scene.mMeshes[node.mMeshes[i]], transform, scale, out);
+  }
+  for (unsigned c = 0; c < node.mNumChildren; ++c) {
+    AppendNode(scene, *node.mChildren[c], transform, scale, out);
+  }
+}
+
+std::shared_ptr<const Mesh> Convert(const aiScene* scene, const Assimp::Importer& importer,
+                                    const std::string& what, const MeshLoadOptions& options,
+                                    const std::string& field) {
+  if (scene == nullptr) {
+    throw InputError(field, "cannot parse mesh " + what + ": " + importer.GetErrorString());
+  }
+  auto mesh = std::make_shared<Mesh>();
+  if (options.apply_node_transforms && scene->mRootNode != nullptr) {
+    AppendNode(*scene, *scene->mRootNode, aiMatrix4x4(), options.scale, *mesh);
+  } else {
+    for (unsigned i = 0; i < scene->mNumMeshes; ++i) {
+      AppendMesh(*scene->mMeshes[i], aiMatrix4x4(), options.scale, *mesh);
+    }
+  }
+  if (mesh->triangles.empty()) throw InputError(field, "mesh " + what + " has no triangles");
+  if (mesh->vertices.size() > static_cast<size_t>(std::numeric_limits<int>::max())) {
+    throw InputError(field, "mesh " + what + " has too many vertices");
+  }
+  for (const Eigen::Vector3d& v : mesh->vertices) {
+    if (!v.allFinite()) throw InputError(field, "mesh " + what + " has a non-finite vertex");
+  }
+  return mesh;
+}
+
+}  // namespace
+
+std::shared_ptr<const Mesh> LoadMeshFile(const std::string& path, const MeshLoadOptions& options,
+                                         const std::string& field) {
+  CheckScale(options, field);
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) {
+    throw Error(ErrorCode::kNotFound, field, "mesh file '" + path + "' does not exist");
+  }
+  if (!std::filesystem::is_regular_file(path, ec)) {
+    throw InputError(field, "mesh path '" + path + "' is not a regular file");
+  }
+  Assimp::Importer importer;
+  ConfigureImporter(importer);
+  const aiScene* scene = importer.ReadFile(path, kPostProcess);
+  return Convert(scene, importer, "'" + path + "'", options, field);
+}
+
+std::shared_ptr<const Mesh> LoadMeshBytes(const std::string& bytes, const std::string& format_hint,
+                                          const MeshLoadOptions& options, const std::string& field) {
+  CheckScale(options, field);
+  if (bytes.empty()) throw InputError(field, "mesh data is empty");
+  const std::string hint =
+      !format_hint.empty() && format_hint.front() == '.' ? format_hint.substr(1) : format_hint;
+  Assimp::Importer importer;
+  ConfigureImporter(importer);
+  const aiScene* scene =
+      importer.ReadFileFromMemory(bytes.data(), bytes.size(), kPostProcess, hint.c_str());
+  return Convert(scene, importer, "(" + std::to_string(bytes.size()) + " bytes, format '" + hint + "')",
+                 options, field);
+}
+
+}  // namespace hgraph
