@@ -56,8 +56,8 @@ class HGraph {
   const std::vector<int>& path_nodes(int p) const { return path_nodes_[p]; }
   // Edge ids along input path p.
   const std::vector<int>& path_edges(int p) const { return path_edges_[p]; }
-  int start() const { return 0; }
-  int goal() const { return 1; }
+  int start() const { return start_id(); }
+  int goal() const { return goal_id(); }
   // (neighbour, edge id) pairs of node i.
   const std::vector<std::pair<int, int>>& neighbours(int i) const { return adjacency_[i]; }
 
@@ -68,6 +68,9 @@ class HGraph {
   int FindEdge(int u, int v) const;
 
  private:
+  static constexpr int start_id() { return 0; }
+  static constexpr int goal_id() { return 1; }
+
   std::vector<InputPath> paths_;
   std::vector<HNode> nodes_;
   std::vector<HEdge> edges_;

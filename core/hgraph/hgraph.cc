@@ -1,0 +1,98 @@
+#include "core/hgraph/hgraph.h"
+
+#include <cmath>
+
+#include "core/common/error.h"
+
+namespace hgraph {
+
+HGraph::HGraph(const Space& space, std::vector<InputPath> paths, double endpoint_tolerance)
+    : paths_(std::move(paths)) {
+  if (!std::isfinite(endpoint_tolerance) || endpoint_tolerance < 0) {
+    throw InputError("options.endpoint_tolerance", "must be finite and >= 0");
+  }
+  if (paths_.empty()) throw InputError("paths", "at least one input path is required");
+  for (size_t p = 0; p < paths_.size(); ++p) {
+    InputPath& path = paths_[p];
+    const std::string field = "paths[" + std::to_string(p) + "]";
+    if (path.name.empty()) path.name = "path" + std::to_string(p);
+    if (path.waypoints.size() < 2) {
+      throw InputError(field + ".waypoints", "path '" + path.name + "' has " +
+                                                 std::to_string(path.waypoints.size()) +
+                                                 " waypoint(s); at least 2 are required");
+    }
+    for (size_t j = 0; j < path.waypoints.size(); ++j) {
+      space.Validate(path.waypoints[j], field + ".waypoints[" + std::to_string(j) + "]");
+      path.waypoints[j] = space.Normalize(path.waypoints[j]);
+    }
+  }
+  const Config& start = paths_[0].waypoints.front();
+  const Config& goal = paths_[0].waypoints.back();
+  for (size_t p = 1; p < paths_.size(); ++p) {
+    const InputPath& path = paths_[p];
+    const std::string field = "paths[" + std::to_string(p) + "]";
+    const double ds = space.Distance(path.waypoints.front(), start);
+    if (ds > endpoint_tolerance) {
+      throw InputError(field + ".waypoints[0]",
+                       "path '" + path.name + "' starts " + std::to_string(ds) +
+                           " away from the start of path '" + paths_[0].name +
+                           "' (tolerance " + std::to_string(endpoint_tolerance) + ")");
+    }
+    const double dg = space.Distance(path.waypoints.back(), goal);
+    if (dg > endpoint_tolerance) {
+      throw InputError(field + ".waypoints[" + std::to_string(path.waypoints.size() - 1) + "]",
+                       "path '" + path.name + "' ends " + std::to_string(dg) +
+                           " away from the goal of path '" + paths_[0].name +
+                           "' (tolerance " + std::to_string(endpoint_tolerance) + ")");
+    }
+  }
+
+  nodes_.push_back(HNode{.q = start, .path = 0, .index = 0});
+  nodes_.push_back(
+      HNode{.q = goal, .path = 0, .index = static_cast<int>(paths_[0].waypoints.size()) - 1});
+  adjacency_.resize(2);
+  path_nodes_.resize(paths_.size());
+  path_edges_.resize(paths_.size());
+  for (size_t p = 0; p < paths_.size(); ++p) {
+    const auto& waypoints = paths_[p].waypoints;
+    std::vector<int>& ids = path_nodes_[p];
+    ids.push_back(start_id());
+    for (size_t j = 1; j + 1 < waypoints.size(); ++j) {
+      ids.push_back(num_nodes());
+      nodes_.push_back(HNode{.q = waypoints[j], .path = static_cast<int>(p), .index = static_cast<int>(j)});
+      adjacency_.emplace_back();
+    }
+    ids.push_back(goal_id());
+    for (size_t j = 1; j < ids.size(); ++j) {
+      // A path may revisit the start or repeat a node; a self-loop adds nothing to any search.
+      if (ids[j - 1] == ids[j]) continue;
+      path_edges_[p].push_back(AddEdge(ids[j - 1], ids[j], /*input=*/true));
+    }
+  }
+}
+
+int HGraph::AddEdge(int u, int v, bool input) {
+  HGRAPH_CHECK(u != v && u >= 0 && v >= 0 && u < num_nodes() && v < num_nodes());
+  const int existing = FindEdge(u, v);
+  if (existing >= 0) {
+    edges_[existing].input = edges_[existing].input || input;
+    return existing;
+  }
+  const int id = num_edges();
+  edges_.push_back(HEdge{.u = u, .v = v, .input = input});
+  adjacency_[u].emplace_back(v, id);
+  adjacency_[v].emplace_back(u, id);
+  return id;
+}
+
+int HGraph::FindEdge(int u, int v) const {
+  // Scan the shorter list; degrees stay small for every variant but all-pairs.
+  const auto& a = adjacency_[u].size() <= adjacency_[v].size() ? adjacency_[u] : adjacency_[v];
+  const int other = adjacency_[u].size() <= adjacency_[v].size() ? v : u;
+  for (const auto& [n, e] : a) {
+    if (n == other) return e;
+  }
+  return -1;
+}
+
+}  // namespace hgraph

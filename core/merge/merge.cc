@@ -1,0 +1,309 @@
+#include "core/merge/merge.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/info.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <mutex>
+
+#include "core/common/error.h"
+#include "core/search/search.h"
+
+namespace hgraph {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double MsSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+int ResolveThreads(int threads) {
+  if (threads < 0) throw InputError("options.threads", "must be >= 0 (0 = all cores)");
+  return threads == 0 ? tbb::info::default_concurrency() : threads;
+}
+
+// Reports progress from worker threads at most about every percent of the work.
+class ProgressReporter {
+ public:
+  ProgressReporter(const ProgressCallback& callback, std::string phase, int64_t total,
+                   const MotionChecker& checker, Clock::time_point started)
+      : callback_(callback),
+        phase_(std::move(phase)),
+        total_(total),
+        step_(std::max<int64_t>(1, total / 100)),
+        checker_(checker),
+        started_(started),
+        checks_at_start_(checker.total_collision_checks()),
+        queries_at_start_(checker.total_distance_queries()) {}
+
+  void Done(int64_t done) const {
+    if (!callback_ || (done % step_ != 0 && done != total_)) return;
+    callback_(Progress{.phase = phase_,
+                       .done = done,
+                       .total = total_,
+                       .collision_checks = checker_.total_collision_checks() - checks_at_start_,
+                       .distance_queries = checker_.total_distance_queries() - queries_at_start_,
+                       .elapsed_ms = MsSince(started_)});
+  }
+
+ private:
+  const ProgressCallback& callback_;
+  std::string phase_;
+  int64_t total_;
+  int64_t step_;
+  const MotionChecker& checker_;
+  Clock::time_point started_;
+  int64_t checks_at_start_;
+  int64_t queries_at_start_;
+};
+
+}  // namespace
+
+HybridizationSession::HybridizationSession(const MotionChecker& checker,
+                                           const MergeRequest& request)
+    : checker_(&checker),
+      options_(request.options),
+      graph_(([&]() -> HGraph {
+        ValidateMeasure(request.measure);
+        ValidateCandidateOptions(request.options.candidates);
+        ResolveThreads(request.options.threads);
+        return HGraph(checker.space(), request.paths, request.options.endpoint_tolerance);
+      })()) {
+  const Clock::time_point started = Clock::now();
+  build_stats_.threads = ResolveThreads(options_.threads);
+  build_stats_.nodes = graph_.num_nodes();
+  build_timing_.validate_ms = MsSince(started);
+
+  // Input edges carry their clearance profile: every result reports the clearance of each input.
+  Clock::time_point phase = Clock::now();
+  std::vector<int> input_edges(graph_.num_edges());
+  for (int e = 0; e < graph_.num_edges(); ++e) input_edges[e] = e;
+  build_stats_.input_edges = graph_.num_edges();
+  CheckEdges(input_edges, /*need_clearance=*/true, "inputs", request.progress, request.cancel,
+             &build_stats_.edges_checked);
+  for (int e : input_edges) {
+    if (graph_.edge(e).report.state == EdgeState::kInvalid) ++build_stats_.input_edges_invalid;
+  }
+  build_timing_.inputs_ms = MsSince(phase);
+
+  phase = Clock::now();
+  request.cancel.ThrowIfStopped();
+  const CandidateSet candidates =
+      BridgeCandidates(graph_, checker.space(), options_.candidates);
+  const bool aligned = options_.candidates.variant == Variant::kEditDistance ||
+                       options_.candidates.variant == Variant::kEditDistanceNeighborhood;
+  (aligned ? build_timing_.align_ms : build_timing_.candidates_ms) = MsSince(phase);
+  build_stats_.candidate_edges = static_cast<int64_t>(candidates.pairs.size());
+  build_stats_.alignments = candidates.alignments;
+  build_stats_.radius = candidates.radius;
+  build_stats_.gap_init = candidates.gap_init;
+  build_stats_.gap_extend = candidates.gap_extend;
+  std::vector<int> bridge_edges;
+  bridge_edges.reserve(candidates.pairs.size());
+  for (const auto& [u, v] : candidates.pairs) bridge_edges.push_back(graph_.AddEdge(u, v, false));
+
+  phase = Clock::now();
+  CheckEdges(bridge_edges, NeedsClearance(request.measure), "check", request.progress,
+             request.cancel, &build_stats_.edges_checked);
+  build_timing_.check_ms = MsSince(phase);
+  for (int e = 0; e < graph_.num_edges(); ++e) {
+    if (graph_.edge(e).report.state == EdgeState::kValid) ++build_stats_.edges_valid;
+  }
+  for (int e = 0; e < graph_.num_edges(); ++e) {
+    build_stats_.collision_checks += graph_.edge(e).report.collision_checks;
+    build_stats_.distance_queries += graph_.edge(e).report.distance_queries;
+  }
+  build_timing_.total_ms = MsSince(started);
+}
+
+void HybridizationSession::CheckEdges(const std::vector<int>& edge_ids, bool need_clearance,
+                                      const std::string& phase, const ProgressCallback& progress,
+                                      const CancelToken& cancel, int64_t* checked) {
+  const int64_t total = static_cast<int64_t>(edge_ids.size());
+  if (total == 0) return;
+  const ProgressReporter reporter(progress, phase, total, *checker_, Clock::now());
+  std::atomic<int64_t> done{0};
+  tbb::task_arena arena(ResolveThreads(options_.threads));
+  arena.execute([&] {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, edge_ids.size(), 1),
+                      [&](const tbb::blocked_range<size_t>& range) {
+                        for (size_t k = range.begin(); k != range.end(); ++k) {
+                          if (cancel.stopped()) return;
+                          HEdge& edge = graph_.mutable_edge(edge_ids[k]);
+                          const EdgeReport previous = std::move(edge.report);
+                          edge.report = checker_->CheckEdge(
+                              EdgeCheckRequest{.from = &graph_.node(edge.u).q,
+                                               .to = &graph_.node(edge.v).q,
+                                               .need_clearance = need_clearance});
+                          // A re-check for clearance keeps counting what the first check cost.
+                          if (previous.state != EdgeState::kUnchecked) {
+                            edge.report.collision_checks += previous.collision_checks;
+                            edge.report.distance_queries += previous.distance_queries;
+                          }
+                          reporter.Done(done.fetch_add(1, std::memory_order_relaxed) + 1);
+                        }
+                      });
+  });
+  cancel.ThrowIfStopped();
+  *checked += total;
+}
+
+MergeResult HybridizationSession::Query(const MeasureSpec& measure,
+                                        const ProgressCallback& progress,
+                                        const CancelToken& cancel) {
+  ValidateMeasure(measure);
+  const Clock::time_point started = Clock::now();
+  MergeResult result;
+  result.measure = measure;
+  result.variant = options_.candidates.variant;
+  const bool first = first_query_;
+  first_query_ = false;
+  if (first) {
+    result.stats = build_stats_;
+    result.timing = build_timing_;
+  } else {
+    result.stats.nodes = build_stats_.nodes;
+    result.stats.input_edges = build_stats_.input_edges;
+    result.stats.input_edges_invalid = build_stats_.input_edges_invalid;
+    result.stats.candidate_edges = build_stats_.candidate_edges;
+    result.stats.alignments = build_stats_.alignments;
+    result.stats.radius = build_stats_.radius;
+    result.stats.gap_init = build_stats_.gap_init;
+    result.stats.gap_extend = build_stats_.gap_extend;
+    result.stats.threads = build_stats_.threads;
+  }
+  const int64_t checks_before = checker_->total_collision_checks();
+  const int64_t queries_before = checker_->total_distance_queries();
+
+  // Valid edges that lack a clearance profile get one now; everything else is reused.
+  Clock::time_point phase = Clock::now();
+  std::vector<int> recheck;
+  if (NeedsClearance(measure)) {
+    for (int e = 0; e < graph_.num_edges(); ++e) {
+      const EdgeReport& report = graph_.edge(e).report;
+      if (report.state == EdgeState::kValid && !report.has_clearance) recheck.push_back(e);
+    }
+  }
+  int64_t rechecked = 0;
+  CheckEdges(recheck, true, "clearance", progress, cancel, &rechecked);
+  result.timing.check_ms += MsSince(phase);
+
+  phase = Clock::now();
+  const SearchResult best = FindBestPath(graph_, measure);
+  result.timing.search_ms = MsSince(phase);
+  if (!best.found) {
+    if (measure.type == MeasureType::kSafeLength) {
+      throw Error(ErrorCode::kFailedPrecondition, "measure.safety",
+                  "no path in the H-Graph keeps clearance >= " + std::to_string(measure.safety));
+    }
+    throw Error(ErrorCode::kFailedPrecondition, "paths",
+                "the valid edges of the H-Graph do not connect start and goal (are the inputs "
+                "valid?)");
+  }
+
+  // The output's own edges get clearance profiles so that every measure can be reported.
+  phase = Clock::now();
+  std::vector<int> output_recheck;
+  for (int e : best.edges) {
+    if (!graph_.edge(e).report.has_clearance) output_recheck.push_back(e);
+  }
+  CheckEdges(output_recheck, true, "evaluate", progress, cancel, &rechecked);
+  result.quality = EvaluateEdges(graph_, best.edges, measure.k);
+  for (int n : best.nodes) {
+    const HNode& node = graph_.node(n);
+    result.path.waypoints.push_back(node.q);
+    result.source_path.push_back(node.path);
+    result.source_index.push_back(node.index);
+  }
+  result.path.name = "merged";
+  result.objective = Objective(measure, result.quality);
+
+  // Every input, under every measure, from the reports stored on its edges.
+  PathQuality best_quality;
+  for (int p = 0; p < graph_.num_paths(); ++p) {
+    const InputPath& path = graph_.path(p);
+    const std::vector<int>& ids = graph_.path_nodes(p);
+    InputReport report{.name = path.name,
+                       .valid = true,
+                       .waypoints = static_cast<int>(path.waypoints.size())};
+    std::vector<int> edges;
+    double length = 0;
+    for (size_t j = 0; j + 1 < ids.size(); ++j) {
+      if (ids[j] == ids[j + 1]) continue;
+      const int e = graph_.FindEdge(ids[j], ids[j + 1]);
+      HGRAPH_CHECK(e >= 0);
+      const EdgeReport& edge = graph_.edge(e).report;
+      length += edge.length;
+      edges.push_back(e);
+      if (report.valid && edge.state != EdgeState::kValid) {
+        report.valid = false;
+        report.invalid_edge = static_cast<int>(j);
+        report.invalid_reason = "edge " + std::to_string(j) + " -> " + std::to_string(j + 1) +
+                                " is invalid at t=" + std::to_string(edge.invalid_at);
+      }
+    }
+    if (report.valid) {
+      report.quality = EvaluateEdges(graph_, edges, measure.k);
+      if (result.best_input < 0 || Better(measure, report.quality, best_quality)) {
+        result.best_input = p;
+        best_quality = report.quality;
+      }
+    } else {
+      report.quality.k = measure.k;
+      report.quality.length = length;
+      report.quality.min_clearance = 0;
+    }
+    result.inputs.push_back(std::move(report));
+  }
+  if (result.best_input >= 0) result.best_input_objective = Objective(measure, best_quality);
+  result.timing.evaluate_ms = MsSince(phase);
+
+  const int64_t query_checks = checker_->total_collision_checks() - checks_before;
+  const int64_t query_queries = checker_->total_distance_queries() - queries_before;
+  if (first) {
+    result.stats.collision_checks += query_checks;
+    result.stats.distance_queries += query_queries;
+    result.stats.edges_checked += rechecked;
+  } else {
+    result.stats.collision_checks = query_checks;
+    result.stats.distance_queries = query_queries;
+    result.stats.edges_checked = rechecked;
+  }
+  int64_t checked_edges = 0;
+  for (int e = 0; e < graph_.num_edges(); ++e) {
+    const EdgeState state = graph_.edge(e).report.state;
+    if (state != EdgeState::kUnchecked) ++checked_edges;
+    if (state == EdgeState::kValid) ++result.stats.edges_valid;
+  }
+  result.stats.edges_reused = first ? 0 : checked_edges - rechecked;
+  result.timing.total_ms = (first ? build_timing_.total_ms : 0.0) + MsSince(started);
+  return result;
+}
+
+size_t HybridizationSession::memory_bytes() const {
+  size_t bytes = sizeof(*this);
+  for (int n = 0; n < graph_.num_nodes(); ++n) {
+    bytes += sizeof(HNode) + graph_.node(n).q.size() * sizeof(double);
+  }
+  for (int e = 0; e < graph_.num_edges(); ++e) {
+    bytes += sizeof(HEdge) + 2 * sizeof(std::pair<int, int>) +
+             graph_.edge(e).report.profile.capacity() * sizeof(ClearanceSample);
+  }
+  for (int p = 0; p < graph_.num_paths(); ++p) {
+    for (const Config& q : graph_.path(p).waypoints) bytes += q.size() * sizeof(double);
+  }
+  return bytes;
+}
+
+MergeResult Merge(const MotionChecker& checker, const MergeRequest& request) {
+  HybridizationSession session(checker, request);
+  return session.Query(request.measure, request.progress, request.cancel);
+}
+
+}  // namespace hgraph

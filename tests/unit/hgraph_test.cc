@@ -1,0 +1,163 @@
+#include "core/hgraph/hgraph.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "core/common/error.h"
+#include "core/hgraph/bridge_candidates.h"
+
+namespace hgraph {
+namespace {
+
+Space Plane() { return Space::RealVector(Eigen::Vector2d(0, 0), Eigen::Vector2d(10, 10)); }
+Config P(double x, double y) { return Eigen::Vector2d(x, y); }
+
+std::string ErrorOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(HGraphTest, SharesStartAndGoalAndAddsInputEdges) {
+  HGraph graph(Plane(),
+               {InputPath{.name = "a", .waypoints = {P(0, 0), P(1, 1), P(2, 2), P(9, 9)}},
+                InputPath{.name = "b", .waypoints = {P(0, 0), P(5, 1), P(9, 9)}}},
+               1e-6);
+  EXPECT_EQ(graph.num_nodes(), 2 + 2 + 1);
+  EXPECT_EQ(graph.num_edges(), 3 + 2);
+  EXPECT_EQ(graph.path_nodes(1).front(), graph.start());
+  EXPECT_EQ(graph.path_nodes(1).back(), graph.goal());
+  EXPECT_EQ(graph.node(graph.path_nodes(1)[1]).path, 1);
+  EXPECT_EQ(graph.node(graph.path_nodes(1)[1]).index, 1);
+  for (int e = 0; e < graph.num_edges(); ++e) {
+    EXPECT_TRUE(graph.edge(e).input);
+    EXPECT_EQ(graph.edge(e).report.state, EdgeState::kUnchecked);
+  }
+  // Adding an existing edge returns it.
+  const int e = graph.AddEdge(graph.path_nodes(0)[1], graph.path_nodes(0)[0], false);
+  EXPECT_EQ(e, graph.path_edges(0)[0]);
+  EXPECT_EQ(graph.num_edges(), 5);
+}
+
+TEST(HGraphTest, RejectsBadInputNamingTheField) {
+  const Space space = Plane();
+  EXPECT_EQ(ErrorOf([&] { HGraph(space, {}, 1e-6); }),
+            "paths: at least one input path is required");
+  EXPECT_EQ(ErrorOf([&] { HGraph(space, {InputPath{.name = "solo", .waypoints = {P(0, 0)}}}, 1e-6); }),
+            "paths[0].waypoints: path 'solo' has 1 waypoint(s); at least 2 are required");
+  EXPECT_EQ(ErrorOf([&] {
+              HGraph(space, {InputPath{.waypoints = {P(0, 0), Eigen::Vector3d(1, 1, 1)}}}, 1e-6);
+            }),
+            "paths[0].waypoints[1]: expected 2 coordinates, got 3");
+  const std::string ends = ErrorOf([&] {
+    HGraph(space,
+           {InputPath{.name = "a", .waypoints = {P(0, 0), P(9, 9)}},
+            InputPath{.name = "b", .waypoints = {P(0, 0), P(9, 8)}}},
+           1e-6);
+  });
+  EXPECT_NE(ends.find("paths[1].waypoints[1]: path 'b' ends 1.0"), std::string::npos) << ends;
+  EXPECT_NE(ErrorOf([&] {
+              HGraph(space, {InputPath{.waypoints = {P(0, NAN), P(9, 9)}}}, 1e-6);
+            }).find("paths[0].waypoints[0][1]: coordinate is not finite"),
+            std::string::npos);
+}
+
+std::vector<InputPath> RandomPaths(std::mt19937_64& rng, int count, int nodes) {
+  std::uniform_real_distribution<double> coord(0.5, 9.5);
+  std::vector<InputPath> paths;
+  for (int p = 0; p < count; ++p) {
+    InputPath path;
+    path.waypoints.push_back(P(0, 0));
+    for (int k = 0; k < nodes; ++k) path.waypoints.push_back(P(coord(rng), coord(rng)));
+    path.waypoints.push_back(P(10, 10));
+    paths.push_back(path);
+  }
+  return paths;
+}
+
+TEST(BridgeCandidatesTest, AllPairsCoversEveryNonEdgePair) {
+  std::mt19937_64 rng(3);
+  const Space space = Plane();
+  HGraph graph(space, RandomPaths(rng, 3, 6), 1e-9);
+  const CandidateSet set =
+      BridgeCandidates(graph, space, CandidateOptions{.variant = Variant::kAllPairs});
+  const int n = graph.num_nodes();
+  EXPECT_EQ(static_cast<int>(set.pairs.size()), n * (n - 1) / 2 - graph.num_edges());
+}
+
+TEST(BridgeCandidatesTest, NeighborhoodRespectsRadiusAndKnnCountsNeighbours) {
+  std::mt19937_64 rng(4);
+  const Space space = Plane();
+  HGraph graph(space, RandomPaths(rng, 3, 8), 1e-9);
+  const CandidateSet near = BridgeCandidates(
+      graph, space, CandidateOptions{.variant = Variant::kNeighborhood, .radius = 2.5});
+  for (const auto& [u, v] : near.pairs) {
+    EXPECT_LE(space.Distance(graph.node(u).q, graph.node(v).q), 2.5);
+  }
+  int close = 0;
+  for (int u = 0; u < graph.num_nodes(); ++u) {
+    for (int v = u + 1; v < graph.num_nodes(); ++v) {
+      close += space.Distance(graph.node(u).q, graph.node(v).q) <= 2.5 && graph.FindEdge(u, v) < 0;
+    }
+  }
+  EXPECT_EQ(static_cast<int>(near.pairs.size()), close);
+  const CandidateSet knn =
+      BridgeCandidates(graph, space, CandidateOptions{.variant = Variant::kKNearest, .phi = 2});
+  EXPECT_LE(static_cast<int>(knn.pairs.size()), 2 * graph.num_nodes());
+  EXPECT_GT(knn.pairs.size(), 0u);
+}
+
+TEST(BridgeCandidatesTest, EditDistanceIsLinearPerPairOfPaths) {
+  std::mt19937_64 rng(5);
+  const Space space = Plane();
+  for (int nodes : {10, 40, 160}) {
+    HGraph graph(space, RandomPaths(rng, 4, nodes), 1e-9);
+    const CandidateSet set =
+        BridgeCandidates(graph, space, CandidateOptions{.variant = Variant::kEditDistance});
+    EXPECT_EQ(set.alignments, 6);
+    // At most two bridges per node of each path in each pair: 2 (n_a + n_b) per pair.
+    EXPECT_LE(static_cast<int>(set.pairs.size()), 6 * 2 * 2 * (nodes + 2));
+    EXPECT_GT(static_cast<int>(set.pairs.size()), nodes);
+  }
+}
+
+TEST(BridgeCandidatesTest, EditDistanceBridgesAGapToItsBoundaries) {
+  const Space space = Plane();
+  // b leaves a at node 2 on a detour and rejoins at node 3.
+  HGraph graph(space,
+               {InputPath{.waypoints = {P(0, 0), P(1, 1), P(2, 2), P(3, 3), P(10, 10)}},
+                InputPath{.waypoints = {P(0, 0), P(1, 1.1), P(2, 2.1), P(2, 9), P(4, 9),
+                                        P(3, 3.1), P(10, 10)}}},
+               1e-9);
+  const CandidateSet set = BridgeCandidates(
+      graph, space,
+      CandidateOptions{.variant = Variant::kEditDistance, .gap_init = 1.0, .gap_extend = 0.5});
+  const auto has = [&](int pa, int ia, int pb, int ib) {
+    const int u = graph.path_nodes(pa)[ia], v = graph.path_nodes(pb)[ib];
+    for (const auto& [x, y] : set.pairs) {
+      if ((x == u && y == v) || (x == v && y == u)) return true;
+    }
+    return false;
+  };
+  EXPECT_TRUE(has(0, 1, 1, 1));  // matched pairs
+  EXPECT_TRUE(has(0, 2, 1, 2));
+  EXPECT_TRUE(has(1, 3, 0, 2));  // detour nodes to both boundaries
+  EXPECT_TRUE(has(1, 3, 0, 3));
+  EXPECT_TRUE(has(1, 4, 0, 2));
+  EXPECT_TRUE(has(1, 4, 0, 3));
+  EXPECT_FALSE(has(1, 3, 0, 1));  // not to the rest of the path
+}
+
+TEST(BridgeCandidatesTest, UnknownVariantIsNamed) {
+  EXPECT_EQ(ErrorOf([] { ParseVariant("bogus", "variant"); }),
+            "variant: unknown variant 'bogus' (expected all-pairs, neighborhood, knn, "
+            "edit-distance or edit-distance-neighborhood)");
+  EXPECT_EQ(ParseVariant("knn", "variant"), Variant::kKNearest);
+}
+
+}  // namespace
+}  // namespace hgraph

@@ -1,0 +1,161 @@
+// Search on small H-Graphs whose edge reports are set by hand, against exhaustive enumeration of
+// every simple start-goal path.
+#include "core/search/search.h"
+
+#include <gtest/gtest.h>
+
+#include <functional>
+#include <random>
+
+#include "core/hgraph/hgraph.h"
+
+namespace hgraph {
+namespace {
+
+Space Plane() { return Space::RealVector(Eigen::Vector2d(0, 0), Eigen::Vector2d(10, 10)); }
+
+Config P(double x, double y) { return Eigen::Vector2d(x, y); }
+
+// Fills a valid report for an edge with a clearance profile of `samples` points.
+void SetReport(HGraph& graph, const Space& space, int e, std::vector<double> clearances) {
+  HEdge& edge = graph.mutable_edge(e);
+  edge.report.state = EdgeState::kValid;
+  edge.report.length = space.Distance(graph.node(edge.u).q, graph.node(edge.v).q);
+  edge.report.has_clearance = true;
+  edge.report.profile.clear();
+  for (size_t s = 0; s < clearances.size(); ++s) {
+    edge.report.profile.push_back(
+        {static_cast<double>(s) / (clearances.size() - 1), clearances[s]});
+  }
+}
+
+// Every simple start-goal path over valid edges, as edge lists.
+std::vector<std::vector<int>> AllPaths(const HGraph& graph) {
+  std::vector<std::vector<int>> out;
+  std::vector<int> edges;
+  std::vector<bool> seen(graph.num_nodes(), false);
+  std::function<void(int)> walk = [&](int u) {
+    if (u == graph.goal()) {
+      out.push_back(edges);
+      return;
+    }
+    seen[u] = true;
+    for (const auto& [v, e] : graph.neighbours(u)) {
+      if (seen[v] || graph.edge(e).report.state != EdgeState::kValid) continue;
+      edges.push_back(e);
+      walk(v);
+      edges.pop_back();
+    }
+    seen[u] = false;
+  };
+  walk(graph.start());
+  return out;
+}
+
+class SearchPropertyTest : public ::testing::TestWithParam<int> {};
+
+TEST_P(SearchPropertyTest, EveryMeasureFindsTheExhaustiveOptimum) {
+  std::mt19937_64 rng(GetParam());
+  std::uniform_real_distribution<double> coord(0, 10), clearance(0.05, 2.0), coin(0, 1);
+  const Space space = Plane();
+  // Three random paths of 3-4 nodes from (0,0) to (10,10).
+  std::vector<InputPath> paths;
+  for (int p = 0; p < 3; ++p) {
+    InputPath path{.name = "p" + std::to_string(p)};
+    path.waypoints.push_back(P(0, 0));
+    const int middle = 1 + p % 2;
+    for (int k = 0; k < middle; ++k) path.waypoints.push_back(P(coord(rng), coord(rng)));
+    path.waypoints.push_back(P(10, 10));
+    paths.push_back(path);
+  }
+  HGraph graph(space, paths, 1e-9);
+  for (int u = 0; u < graph.num_nodes(); ++u) {
+    for (int v = u + 1; v < graph.num_nodes(); ++v) {
+      if (coin(rng) < 0.4) graph.AddEdge(u, v, false);
+    }
+  }
+  for (int e = 0; e < graph.num_edges(); ++e) {
+    if (!graph.edge(e).input && coin(rng) < 0.3) {
+      graph.mutable_edge(e).report.state = EdgeState::kInvalid;
+      continue;
+    }
+    SetReport(graph, space, e, {clearance(rng), clearance(rng), clearance(rng)});
+  }
+  const std::vector<std::vector<int>> all = AllPaths(graph);
+  ASSERT_FALSE(all.empty());
+  for (const MeasureSpec spec : {MeasureSpec{.type = MeasureType::kLength},
+                                 MeasureSpec{.type = MeasureType::kInverseClearance, .k = 3},
+                                 MeasureSpec{.type = MeasureType::kInverseClearance, .k = 0.25},
+                                 MeasureSpec{.type = MeasureType::kBottleneckClearance},
+                                 MeasureSpec{.type = MeasureType::kSafeLength, .safety = 0.3}}) {
+    PathQuality best;
+    bool any = false;
+    for (const auto& edges : all) {
+      const PathQuality q = EvaluateEdges(graph, edges, spec.k);
+      if (Objective(spec, q) == std::numeric_limits<double>::infinity()) continue;
+      if (!any || Better(spec, q, best)) best = q;
+      any = true;
+    }
+    const SearchResult found = FindBestPath(graph, spec);
+    ASSERT_EQ(found.found, any) << MeasureTypeName(spec.type);
+    if (!any) continue;
+    EXPECT_EQ(found.nodes.front(), graph.start());
+    EXPECT_EQ(found.nodes.back(), graph.goal());
+    EXPECT_NEAR(Objective(spec, found.quality), Objective(spec, best), 1e-9)
+        << MeasureTypeName(spec.type);
+    if (spec.type == MeasureType::kBottleneckClearance) {
+      EXPECT_NEAR(found.quality.length, best.length, 1e-9) << "ties broken by length";
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Seeds, SearchPropertyTest, ::testing::Range(1, 41));
+
+TEST(SearchTest, InvalidEdgesAreNeverUsed) {
+  const Space space = Plane();
+  HGraph graph(space, {InputPath{.waypoints = {P(0, 0), P(5, 5), P(10, 10)}}}, 0);
+  const int shortcut = graph.AddEdge(graph.start(), graph.goal(), false);
+  for (int e = 0; e < graph.num_edges(); ++e) SetReport(graph, space, e, {1, 1});
+  graph.mutable_edge(shortcut).report.state = EdgeState::kInvalid;
+  // The two input edges are collinear with the shortcut, so only validity can tell them apart.
+  const SearchResult r = FindBestPath(graph, MeasureSpec{});
+  ASSERT_TRUE(r.found);
+  EXPECT_EQ(r.nodes.size(), 3u);
+}
+
+TEST(SearchTest, SafeLengthTakesTheLongerSaferRoute) {
+  const Space space = Plane();
+  HGraph graph(space,
+               {InputPath{.waypoints = {P(0, 0), P(5, 6), P(10, 10)}},
+                InputPath{.waypoints = {P(0, 0), P(9, 1), P(10, 10)}}},
+               0);
+  SetReport(graph, space, graph.path_edges(0)[0], {0.5, 0.1, 0.5});  // short but tight
+  SetReport(graph, space, graph.path_edges(0)[1], {0.5, 0.5});
+  SetReport(graph, space, graph.path_edges(1)[0], {0.9, 0.8, 0.9});
+  SetReport(graph, space, graph.path_edges(1)[1], {0.9, 0.9});
+  const SearchResult shortest = FindBestPath(graph, MeasureSpec{});
+  const SearchResult safe =
+      FindBestPath(graph, MeasureSpec{.type = MeasureType::kSafeLength, .safety = 0.3});
+  ASSERT_TRUE(shortest.found && safe.found);
+  EXPECT_EQ(graph.node(shortest.nodes[1]).path, 0);
+  EXPECT_EQ(graph.node(safe.nodes[1]).path, 1);
+  EXPECT_FALSE(
+      FindBestPath(graph, MeasureSpec{.type = MeasureType::kSafeLength, .safety = 1.0}).found);
+}
+
+TEST(SearchTest, InverseClearanceIntegratesTheProfile) {
+  const Space space = Plane();
+  HGraph graph(space, {InputPath{.waypoints = {P(0, 0), P(3, 4)}}}, 0);
+  SetReport(graph, space, 0, {1.0, 0.5, 1.0});
+  const SearchResult r =
+      FindBestPath(graph, MeasureSpec{.type = MeasureType::kInverseClearance, .k = 1});
+  ASSERT_TRUE(r.found);
+  // Trapezoid over two halves of length 2.5: 2.5 * (1 + 2) / 2 * 2.
+  EXPECT_NEAR(r.quality.inverse_clearance, 7.5, 1e-12);
+  EXPECT_NEAR(r.quality.min_clearance, 0.5, 1e-12);
+  EXPECT_NEAR(r.quality.avg_clearance, (2.5 * 0.75 * 2) / 5.0, 1e-12);
+  EXPECT_NEAR(r.quality.length, 5.0, 1e-12);
+}
+
+}  // namespace
+}  // namespace hgraph
