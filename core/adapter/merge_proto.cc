@@ -1,0 +1,192 @@
+#include "core/adapter/merge_proto.h"
+
+#include <cmath>
+#include <sstream>
+#include <string>
+
+#include "core/adapter/path_io.h"
+#include "core/adapter/scene_proto.h"
+#include "core/common/error.h"
+
+namespace hgraph {
+namespace {
+
+std::string Num(double v) {
+  std::ostringstream out;
+  out << v;
+  return out.str();
+}
+
+void RequireNonNegative(double v, const std::string& field) {
+  if (!std::isfinite(v) || v < 0) throw InputError(field, "must be finite and >= 0, got " + Num(v));
+}
+
+void RequirePositive(double v, const std::string& field) {
+  if (!std::isfinite(v) || v <= 0) throw InputError(field, "must be finite and > 0, got " + Num(v));
+}
+
+}  // namespace
+
+MeasureSpec MeasureFromProto(const v1::Measure& proto) {
+  MeasureSpec spec;
+  switch (proto.type()) {
+    case v1::Measure::TYPE_UNSPECIFIED:
+    case v1::Measure::TYPE_LENGTH: spec.type = MeasureType::kLength; break;
+    case v1::Measure::TYPE_INVERSE_CLEARANCE: spec.type = MeasureType::kInverseClearance; break;
+    case v1::Measure::TYPE_BOTTLENECK_CLEARANCE:
+      spec.type = MeasureType::kBottleneckClearance;
+      break;
+    case v1::Measure::TYPE_SAFE_LENGTH: spec.type = MeasureType::kSafeLength; break;
+    default:
+      throw InputError("measure.type",
+                       "unknown measure type " + std::to_string(static_cast<int>(proto.type())));
+  }
+  if (proto.has_k()) {
+    RequireNonNegative(proto.k(), "measure.k");
+    spec.k = proto.k();
+  }
+  RequireNonNegative(proto.safety(), "measure.safety");
+  spec.safety = proto.safety();
+  return spec;
+}
+
+v1::Measure MeasureToProto(const MeasureSpec& spec) {
+  v1::Measure proto;
+  switch (spec.type) {
+    case MeasureType::kLength: proto.set_type(v1::Measure::TYPE_LENGTH); break;
+    case MeasureType::kInverseClearance: proto.set_type(v1::Measure::TYPE_INVERSE_CLEARANCE); break;
+    case MeasureType::kBottleneckClearance:
+      proto.set_type(v1::Measure::TYPE_BOTTLENECK_CLEARANCE);
+      break;
+    case MeasureType::kSafeLength: proto.set_type(v1::Measure::TYPE_SAFE_LENGTH); break;
+  }
+  proto.set_k(spec.k);
+  proto.set_safety(spec.safety);
+  return proto;
+}
+
+Variant VariantFromProto(v1::Variant variant) {
+  switch (variant) {
+    case v1::VARIANT_UNSPECIFIED:
+    case v1::VARIANT_EDIT_DISTANCE: return Variant::kEditDistance;
+    case v1::VARIANT_ALL_PAIRS: return Variant::kAllPairs;
+    case v1::VARIANT_NEIGHBORHOOD: return Variant::kNeighborhood;
+    case v1::VARIANT_K_NEAREST: return Variant::kKNearest;
+    case v1::VARIANT_EDIT_DISTANCE_NEIGHBORHOOD: return Variant::kEditDistanceNeighborhood;
+    default:
+      throw InputError("options.variant",
+                       "unknown variant " + std::to_string(static_cast<int>(variant)));
+  }
+}
+
+v1::Variant VariantToProto(Variant variant) {
+  switch (variant) {
+    case Variant::kAllPairs: return v1::VARIANT_ALL_PAIRS;
+    case Variant::kNeighborhood: return v1::VARIANT_NEIGHBORHOOD;
+    case Variant::kKNearest: return v1::VARIANT_K_NEAREST;
+    case Variant::kEditDistance: return v1::VARIANT_EDIT_DISTANCE;
+    case Variant::kEditDistanceNeighborhood: return v1::VARIANT_EDIT_DISTANCE_NEIGHBORHOOD;
+  }
+  return v1::VARIANT_UNSPECIFIED;
+}
+
+MergeOptions MergeOptionsFromProto(const v1::MergeOptions& proto) {
+  MergeOptions options;
+  options.candidates.variant = VariantFromProto(proto.variant());
+  // Core code reads a non-positive radius and negative gaps as "automatic", so an explicit bad
+  // value must be caught here rather than silently replaced.
+  if (proto.has_radius()) {
+    RequirePositive(proto.radius(), "options.radius");
+    options.candidates.radius = proto.radius();
+  }
+  if (proto.has_phi()) {
+    if (proto.phi() < 1) {
+      throw InputError("options.phi", "must be >= 1, got " + std::to_string(proto.phi()));
+    }
+    options.candidates.phi = proto.phi();
+  }
+  if (proto.has_gap_init()) {
+    RequireNonNegative(proto.gap_init(), "options.gap_init");
+    options.candidates.gap_init = proto.gap_init();
+  }
+  if (proto.has_gap_extend()) {
+    RequireNonNegative(proto.gap_extend(), "options.gap_extend");
+    options.candidates.gap_extend = proto.gap_extend();
+  }
+  if (proto.has_resolution()) RequirePositive(proto.resolution(), "options.resolution");
+  if (proto.threads() < 0) {
+    throw InputError("options.threads",
+                     "must be >= 0 (0 = all cores), got " + std::to_string(proto.threads()));
+  }
+  options.threads = proto.threads();
+  if (proto.has_endpoint_tolerance()) {
+    RequireNonNegative(proto.endpoint_tolerance(), "options.endpoint_tolerance");
+    options.endpoint_tolerance = proto.endpoint_tolerance();
+  }
+  return options;
+}
+
+double ResolutionFromProto(const v1::MergeOptions& options, const v1::Scene& scene) {
+  if (options.has_resolution()) {
+    RequirePositive(options.resolution(), "options.resolution");
+    return options.resolution();
+  }
+  return SceneResolution(scene);
+}
+
+v1::PathQuality QualityToProto(const PathQuality& quality) {
+  v1::PathQuality proto;
+  proto.set_length(quality.length);
+  proto.set_min_clearance(quality.min_clearance);
+  proto.set_avg_clearance(quality.avg_clearance);
+  proto.set_inverse_clearance(quality.inverse_clearance);
+  proto.set_k(quality.k);
+  return proto;
+}
+
+v1::MergeResult MergeResultToProto(const MergeResult& result) {
+  v1::MergeResult proto;
+  *proto.mutable_path() = PathToProto(result.path);
+  *proto.mutable_quality() = QualityToProto(result.quality);
+  for (const InputReport& input : result.inputs) {
+    v1::InputReport* out = proto.add_inputs();
+    out->set_name(input.name);
+    out->set_valid(input.valid);
+    out->set_invalid_edge(input.invalid_edge);
+    out->set_invalid_reason(input.invalid_reason);
+    *out->mutable_quality() = QualityToProto(input.quality);
+    out->set_waypoints(input.waypoints);
+  }
+  const MergeStats& s = result.stats;
+  v1::MergeStats* stats = proto.mutable_stats();
+  stats->set_nodes(s.nodes);
+  stats->set_input_edges(s.input_edges);
+  stats->set_input_edges_invalid(s.input_edges_invalid);
+  stats->set_candidate_edges(s.candidate_edges);
+  stats->set_edges_checked(s.edges_checked);
+  stats->set_edges_valid(s.edges_valid);
+  stats->set_collision_checks(s.collision_checks);
+  stats->set_distance_queries(s.distance_queries);
+  stats->set_edges_reused(s.edges_reused);
+  stats->set_threads(s.threads);
+  const MergeTiming& t = result.timing;
+  v1::Timing* timing = proto.mutable_timing();
+  timing->set_validate_ms(t.validate_ms);
+  timing->set_inputs_ms(t.inputs_ms);
+  timing->set_align_ms(t.align_ms);
+  timing->set_candidates_ms(t.candidates_ms);
+  timing->set_check_ms(t.check_ms);
+  timing->set_search_ms(t.search_ms);
+  timing->set_evaluate_ms(t.evaluate_ms);
+  timing->set_total_ms(t.total_ms);
+  for (int p : result.source_path) proto.add_source_path(p);
+  for (int i : result.source_index) proto.add_source_index(i);
+  *proto.mutable_measure() = MeasureToProto(result.measure);
+  proto.set_variant(VariantToProto(result.variant));
+  proto.set_best_input(result.best_input);
+  proto.set_objective(result.objective);
+  proto.set_best_input_objective(result.best_input_objective);
+  return proto;
+}
+
+}  // namespace hgraph

@@ -1,0 +1,27 @@
+// Conversions between hgraph.v1 merge messages (merge.proto) and the core merge types. Unset
+// optional fields take the core defaults; bad values are InputErrors naming "measure.<field>" or
+// "options.<field>".
+#pragma once
+
+#include "core/merge/merge.h"
+#include "hgraph/v1/merge.pb.h"
+#include "hgraph/v1/scene.pb.h"
+
+namespace hgraph {
+
+MeasureSpec MeasureFromProto(const v1::Measure& proto);
+v1::Measure MeasureToProto(const MeasureSpec& spec);
+
+Variant VariantFromProto(v1::Variant variant);
+v1::Variant VariantToProto(Variant variant);
+
+// Everything of v1::MergeOptions but the resolution, which belongs to the local planner (see
+// ResolutionFromProto).
+MergeOptions MergeOptionsFromProto(const v1::MergeOptions& proto);
+// The local-planner resolution: options.resolution if set, else the scene's, else 0.01.
+double ResolutionFromProto(const v1::MergeOptions& options, const v1::Scene& scene);
+
+v1::PathQuality QualityToProto(const PathQuality& quality);
+v1::MergeResult MergeResultToProto(const MergeResult& result);
+
+}  // namespace hgraph
