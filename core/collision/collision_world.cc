@@ -1,0 +1,297 @@
+#include "core/collision/collision_world.h"
+
+#include <fcl/broadphase/broadphase_dynamic_AABB_tree.h>
+#include <fcl/geometry/bvh/BVH_model.h>
+#include <fcl/geometry/shape/box.h>
+#include <fcl/geometry/shape/cylinder.h>
+#include <fcl/geometry/shape/sphere.h>
+#include <fcl/math/bv/OBBRSS.h>
+#include <fcl/narrowphase/collision.h>
+#include <fcl/narrowphase/distance.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <utility>
+#include <vector>
+
+#include "core/common/error.h"
+
+namespace hgraph {
+namespace {
+
+// OBBRSS only: FCL's traversal for the other BV types transforms the vertices of a shared model
+// in place, which is both slower and a data race between threads.
+using MeshModel = fcl::BVHModel<fcl::OBBRSSd>;
+using GeometryPtr = std::shared_ptr<fcl::CollisionGeometryd>;
+
+// Distances of primitive pairs without a closed form (box-box, box-cylinder, ...) go through GJK.
+// FCL 0.7's libccd GJK returns distances off by up to 0.15 for a turned box against a box, while
+// its own GJK (GST_INDEP) is right to the tolerance. Clearance feeds a certificate that sums and
+// compares distances, so the tolerance is tighter than the default 1e-6.
+constexpr fcl::GJKSolverType kDistanceSolver = fcl::GST_INDEP;
+constexpr double kGjkDistanceTolerance = 1e-9;
+
+std::shared_ptr<MeshModel> BuildMesh(const Mesh& mesh) {
+  auto model = std::make_shared<MeshModel>();
+  std::vector<fcl::Vector3d> points(mesh.vertices.begin(), mesh.vertices.end());
+  std::vector<fcl::Triangle> triangles;
+  triangles.reserve(mesh.triangles.size());
+  for (const Eigen::Vector3i& t : mesh.triangles) triangles.emplace_back(t[0], t[1], t[2]);
+  HGRAPH_CHECK(model->beginModel(static_cast<int>(triangles.size()),
+                                 static_cast<int>(points.size())) == fcl::BVH_OK);
+  HGRAPH_CHECK(model->addSubModel(points, triangles) == fcl::BVH_OK);
+  HGRAPH_CHECK(model->endModel() == fcl::BVH_OK);
+  return model;
+}
+
+// Meshes shared between objects (the same Mesh pointer) get one BVH.
+class GeometryBuilder {
+ public:
+  GeometryPtr Build(const Shape& shape) {
+    switch (shape.type) {
+      case ShapeType::kBox:
+        return std::make_shared<fcl::Boxd>(shape.box_size.x(), shape.box_size.y(),
+                                           shape.box_size.z());
+      case ShapeType::kSphere:
+        // FCL's sphere code is analytic (sphere-box, sphere-cylinder, sphere-sphere, sphere-
+        // triangle) and handles radius 0 exactly, so a point robot needs no stand-in radius.
+        return std::make_shared<fcl::Sphered>(shape.radius);
+      case ShapeType::kCylinder:
+        return std::make_shared<fcl::Cylinderd>(shape.radius, shape.length);
+      case ShapeType::kMesh: {
+        auto [it, inserted] = meshes_.try_emplace(shape.mesh.get());
+        if (inserted) {
+          auto model = BuildMesh(*shape.mesh);
+          bytes_ += static_cast<size_t>(model->memUsage(0));
+          it->second = std::move(model);
+        }
+        return it->second;
+      }
+    }
+    HGRAPH_CHECK(false);
+    return nullptr;
+  }
+  size_t bytes() const { return bytes_; }
+
+ private:
+  std::map<const Mesh*, GeometryPtr> meshes_;
+  size_t bytes_ = 0;
+};
+
+// Farthest point of the shape from `origin`, where origin is expressed in the shape's frame.
+double FarthestDistance(const Shape& shape, const Eigen::Vector3d& origin) {
+  switch (shape.type) {
+    case ShapeType::kBox: {
+      double best = 0;
+      for (int corner = 0; corner < 8; ++corner) {
+        const Eigen::Vector3d p(corner & 1 ? 0.5 : -0.5, corner & 2 ? 0.5 : -0.5,
+                                corner & 4 ? 0.5 : -0.5);
+        best = std::max(best, (p.cwiseProduct(shape.box_size) - origin).norm());
+      }
+      return best;
+    }
+    case ShapeType::kSphere:
+      return origin.norm() + shape.radius;
+    case ShapeType::kCylinder: {
+      // The farthest point lies on a rim, on the side away from the origin's axis projection.
+      const double radial = origin.head<2>().norm() + shape.radius;
+      const double axial = std::abs(origin.z()) + shape.length / 2;
+      return std::hypot(radial, axial);
+    }
+    case ShapeType::kMesh: {
+      double best = 0;
+      for (const Eigen::Vector3d& v : shape.mesh->vertices) best = std::max(best, (v - origin).norm());
+      return best;
+    }
+  }
+  HGRAPH_CHECK(false);
+  return 0;
+}
+
+void SetPose(fcl::CollisionObjectd& object, const Eigen::Isometry3d& pose) {
+  object.setTransform(pose.linear(), pose.translation());
+  object.computeAABB();
+}
+
+struct CollideData {
+  fcl::CollisionRequestd request;
+  bool hit = false;
+};
+
+bool CollideCallback(fcl::CollisionObjectd* a, fcl::CollisionObjectd* b, void* data) {
+  auto* d = static_cast<CollideData*>(data);
+  if (d->hit) return true;
+  fcl::CollisionResultd result;
+  fcl::collide(a, b, d->request, result);
+  d->hit = result.isCollision();
+  return d->hit;
+}
+
+struct DistanceData {
+  fcl::DistanceRequestd request;
+  double min_distance = std::numeric_limits<double>::infinity();
+};
+
+double PairDistance(const fcl::CollisionObjectd* a, const fcl::CollisionObjectd* b,
+                    const fcl::DistanceRequestd& request) {
+  fcl::DistanceResultd result;
+  fcl::distance(a, b, request, result);
+  // In collision FCL reports an implementation-defined value (-1 for GJK pairs).
+  return std::max(0.0, result.min_distance);
+}
+
+bool DistanceCallback(fcl::CollisionObjectd* a, fcl::CollisionObjectd* b, void* data,
+                      double& dist) {
+  auto* d = static_cast<DistanceData*>(data);
+  d->min_distance = std::min(d->min_distance, PairDistance(a, b, d->request));
+  // The broad phase prunes subtrees farther than `dist`.
+  dist = d->min_distance;
+  return d->min_distance <= 0;
+}
+
+}  // namespace
+
+struct CollisionWorld::Impl {
+  // Prototypes of the robot bodies' collision objects. A context copies them: FCL's
+  // CollisionObject constructor rewrites the shared geometry's local AABB, which would race with
+  // queries running in other threads, while a copy shares the geometry without touching it.
+  std::vector<std::unique_ptr<fcl::CollisionObjectd>> body_prototypes;
+  std::vector<int> body_component;
+  std::vector<Eigen::Isometry3d> body_offset;
+  std::vector<double> body_radius;
+  // Bodies driven by the same component are one rigid body: never checked against each other.
+  std::vector<std::pair<int, int>> self_pairs;
+
+  // Declared before the manager, which holds raw pointers to them.
+  std::vector<std::unique_ptr<fcl::CollisionObjectd>> obstacles;
+  // Queries of one object against the manager (collide(obj, ...), distance(obj, ...)) are const
+  // and only read the tree and the obstacle objects, so every thread shares this one.
+  fcl::DynamicAABBTreeCollisionManagerd obstacle_manager;
+
+  size_t memory_bytes = 0;
+};
+
+CollisionWorld::CollisionWorld(std::shared_ptr<const Scene> scene)
+    : scene_(std::move(scene)), impl_(std::make_unique<Impl>()) {
+  HGRAPH_CHECK(scene_ != nullptr);
+  ValidateScene(*scene_);
+  GeometryBuilder builder;
+  Impl& w = *impl_;
+
+  const int num_bodies = static_cast<int>(scene_->robot.size());
+  for (int i = 0; i < num_bodies; ++i) {
+    const RobotBody& body = scene_->robot[i];
+    w.body_prototypes.push_back(std::make_unique<fcl::CollisionObjectd>(builder.Build(body.shape)));
+    w.body_component.push_back(body.component);
+    w.body_offset.push_back(body.offset);
+    w.body_radius.push_back(FarthestDistance(body.shape, body.offset.inverse().translation()));
+  }
+  if (scene_->self_collision) {
+    for (int i = 0; i < num_bodies; ++i) {
+      for (int j = i + 1; j < num_bodies; ++j) {
+        if (w.body_component[i] != w.body_component[j]) w.self_pairs.emplace_back(i, j);
+      }
+    }
+  }
+
+  std::vector<fcl::CollisionObjectd*> registered;
+  for (const Obstacle& obstacle : scene_->obstacles) {
+    w.obstacles.push_back(std::make_unique<fcl::CollisionObjectd>(
+        builder.Build(obstacle.shape), obstacle.pose.linear(), obstacle.pose.translation()));
+    registered.push_back(w.obstacles.back().get());
+  }
+  w.obstacle_manager.registerObjects(registered);
+  w.obstacle_manager.setup();
+
+  // Objects and tree nodes (two per obstacle) beside the BVHs, counted coarsely.
+  w.memory_bytes = sizeof(Impl) + builder.bytes() +
+                   (w.obstacles.size() + w.body_prototypes.size()) *
+                       (sizeof(fcl::CollisionObjectd) + sizeof(fcl::Boxd)) +
+                   2 * w.obstacles.size() * 96;
+}
+
+CollisionWorld::~CollisionWorld() = default;
+
+std::unique_ptr<CollisionContext> CollisionWorld::MakeContext() const {
+  return std::make_unique<CollisionContext>(*this);
+}
+
+double CollisionWorld::BodyRadius(int body) const {
+  HGRAPH_CHECK(body >= 0 && body < static_cast<int>(impl_->body_radius.size()));
+  return impl_->body_radius[body];
+}
+
+size_t CollisionWorld::memory_bytes() const { return impl_->memory_bytes; }
+
+struct CollisionContext::Impl {
+  std::vector<std::unique_ptr<fcl::CollisionObjectd>> bodies;
+  CollideData collide;
+  DistanceData distance;
+};
+
+CollisionContext::CollisionContext(const CollisionWorld& world)
+    : world_(world), impl_(std::make_unique<Impl>()) {
+  for (const auto& prototype : world.impl().body_prototypes) {
+    impl_->bodies.push_back(std::make_unique<fcl::CollisionObjectd>(*prototype));
+  }
+  impl_->distance.request.distance_tolerance = kGjkDistanceTolerance;
+  impl_->distance.request.gjk_solver_type = kDistanceSolver;
+}
+
+CollisionContext::~CollisionContext() = default;
+
+namespace {
+
+void PlaceBodies(const CollisionWorld& world,
+                 std::vector<std::unique_ptr<fcl::CollisionObjectd>>& bodies, const Config& q) {
+  const Space& space = world.space();
+  HGRAPH_CHECK(q.size() == space.dimension());
+  const CollisionWorld::Impl& w = world.impl();
+  for (size_t i = 0; i < bodies.size(); ++i) {
+    SetPose(*bodies[i], space.Pose(w.body_component[i], q) * w.body_offset[i]);
+  }
+}
+
+}  // namespace
+
+bool CollisionContext::Valid(const Config& q) {
+  ++collision_checks_;
+  if (!world_.space().InBounds(q)) return false;
+  PlaceBodies(world_, impl_->bodies, q);
+  const CollisionWorld::Impl& w = world_.impl();
+  CollideData& data = impl_->collide;
+  for (const auto& body : impl_->bodies) {
+    data.hit = false;
+    w.obstacle_manager.collide(body.get(), &data, CollideCallback);
+    if (data.hit) return false;
+  }
+  for (const auto& [i, j] : w.self_pairs) {
+    fcl::CollisionResultd result;
+    fcl::collide(impl_->bodies[i].get(), impl_->bodies[j].get(), data.request, result);
+    if (result.isCollision()) return false;
+  }
+  return true;
+}
+
+double CollisionContext::Clearance(const Config& q) {
+  ++distance_queries_;
+  if (!world_.space().InBounds(q)) return 0.0;
+  PlaceBodies(world_, impl_->bodies, q);
+  const CollisionWorld::Impl& w = world_.impl();
+  DistanceData& data = impl_->distance;
+  data.min_distance = std::numeric_limits<double>::infinity();
+  for (const auto& body : impl_->bodies) {
+    w.obstacle_manager.distance(body.get(), &data, DistanceCallback);
+    if (data.min_distance <= 0) return 0.0;
+  }
+  for (const auto& [i, j] : w.self_pairs) {
+    data.min_distance = std::min(
+        data.min_distance, PairDistance(impl_->bodies[i].get(), impl_->bodies[j].get(), data.request));
+    if (data.min_distance <= 0) return 0.0;
+  }
+  return data.min_distance;
+}
+
+}  // namespace hgraph
