@@ -95,8 +95,12 @@ std::vector<InputPath> ParsePathsText(const std::string& text, const std::string
     }
     line = Trim(line);
     if (line.empty()) {
-      // Only a truly blank line separates paths; a comment line does not.
-      if (hash == std::string_view::npos) finish();
+      // Only a truly blank line separates paths; a comment line does not. A blank line also
+      // detaches a preceding comment (a file header) from the next path.
+      if (hash == std::string_view::npos) {
+        finish();
+        pending_name.clear();
+      }
       continue;
     }
 

@@ -19,7 +19,8 @@ v1::PathSet PathsToProto(const std::vector<InputPath>& paths);
 // Reads a paths file in either format, told apart by the first non-space character:
 //  '{'   a proto3 JSON PathSet;
 //  else  OMPL's matrix format (PathGeometric::printAsMatrix): one configuration per line as
-//        whitespace-separated numbers, blank lines between paths, '#' starting a comment.
+//        whitespace-separated numbers, blank lines between paths, '#' starting a comment. A
+//        comment line directly above a path's first waypoint names the path.
 // In the text format a non-numeric or non-finite token, or a line whose count differs from the
 // space's dimension, is an InputError naming "file:line". A missing file is Error(kNotFound).
 std::vector<InputPath> LoadPathsFile(const std::string& path, const Space& space);

@@ -366,7 +366,7 @@ TEST(AdapterTest, ToJsonUsesSnakeCaseAndPrintsDefaults) {
 TEST(AdapterTest, OmplTextFormatWithCommentsAndBlankLines) {
   const Space space = Space::RealVector(Eigen::Vector2d(0, 0), Eigen::Vector2d(10, 10));
   const std::vector<InputPath> paths = ParsePathsText(
-      "# first\n1 2\n  3\t4.5   # trailing comment\n\n\n+5 6e-1\n# not a separator\n7 8\n\n",
+      "# header\n\n# first\n1 2\n  3\t4.5   # trailing comment\n\n\n+5 6e-1\n# not a separator\n7 8\n\n",
       "p.txt", space);
   ASSERT_EQ(paths.size(), 2u);
   EXPECT_EQ(paths[0].name, "first");
