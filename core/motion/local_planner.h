@@ -2,6 +2,17 @@
 // bisection order (bad motions fail early). With clearance requested, every sample's clearance
 // is recorded, and a stretch between two samples whose clearances exceed how far any robot point
 // can move between them is certified free.
+//
+// The certificate: between samples a and b no point of body i moves farther than
+// TranslationDistance + BodyRadius(i) * RotationAngle of its component, so no point of the robot
+// moves farther than D(a, b), the sum of that bound over the bodies (which also bounds how much
+// the gap between two bodies can shrink). Points move at a steady rate, so at fraction s of the
+// stretch the robot is within s * D of where it was at a and within (1 - s) * D of where it is
+// at b; if cl(a) + cl(b) > D(a, b), one of the two is less than the clearance there for every s,
+// and the whole stretch is collision-free. A stretch that fails the test is halved with one more
+// distance query, down to kMaxRefineDepth halvings of a resolution step; a midpoint in collision
+// makes the edge invalid (this catches obstacles thinner than the resolution). The refined
+// samples join the profile; EdgeReport::certified says whether every stretch passed.
 #pragma once
 
 #include <atomic>
@@ -34,6 +45,8 @@ class LocalPlanner final : public MotionChecker {
 
   // Number of samples (including both ends) a motion of this length is checked at.
   int SampleCount(double length) const;
+  // Halvings of one resolution step the clearance certificate may ask for.
+  static constexpr int kMaxRefineDepth = 8;
   const CollisionWorld& world() const { return *world_; }
 
  private:

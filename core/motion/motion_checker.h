@@ -28,6 +28,10 @@ struct EdgeReport {
   bool has_clearance = false;
   std::vector<ClearanceSample> profile;
   double invalid_at = -1;  // parameter of the first invalid sample found, or -1
+  // With clearance: true when every stretch between consecutive profile samples is proven free,
+  // because the two clearances add up to more than any robot point can move along the stretch.
+  // False means the motion was only checked at the samples (see core/motion/local_planner.h).
+  bool certified = false;
   int64_t collision_checks = 0;
   int64_t distance_queries = 0;
 };

@@ -1,0 +1,223 @@
+#include "core/motion/local_planner.h"
+
+#include <tbb/enumerable_thread_specific.h>
+
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "core/common/error.h"
+
+namespace hgraph {
+namespace {
+
+// Interior indices 1..segments-1 of the sample grid in van der Corput order (0.5, 0.25, 0.75,
+// 0.125, 0.625, ...), so that the checks spread over the motion as early as possible. For a grid
+// that is not a power of two, the dyadic points are rounded to the grid; since their spacing is
+// at most one grid step, every index is reached.
+std::vector<int> BisectionOrder(int segments) {
+  std::vector<int> order;
+  if (segments < 2) return order;
+  order.reserve(segments - 1);
+  int bits = 0;
+  while ((int64_t{1} << bits) < segments) ++bits;
+  const int64_t dyadic = int64_t{1} << bits;
+  std::vector<bool> seen(segments + 1, false);
+  for (int64_t i = 1; i < dyadic; ++i) {
+    int64_t j = 0;  // i with its `bits` low bits reversed
+    for (int b = 0; b < bits; ++b) j |= ((i >> b) & 1) << (bits - 1 - b);
+    const int k = static_cast<int>((2 * j * segments + dyadic) / (2 * dyadic));
+    if (k <= 0 || k >= segments || seen[k]) continue;
+    seen[k] = true;
+    order.push_back(k);
+  }
+  HGRAPH_CHECK(static_cast<int>(order.size()) == segments - 1);
+  return order;
+}
+
+}  // namespace
+
+struct LocalPlanner::Impl {
+  CollisionContext& Context(const CollisionWorld& world) {
+    std::unique_ptr<CollisionContext>& context = contexts.local();
+    if (context == nullptr) context = world.MakeContext();
+    return *context;
+  }
+
+  tbb::enumerable_thread_specific<std::unique_ptr<CollisionContext>> contexts;
+  std::atomic<int64_t> collision_checks{0};
+  std::atomic<int64_t> distance_queries{0};
+  std::vector<int> body_component;
+  std::vector<double> body_radius;
+};
+
+namespace {
+
+// One CheckEdge call: the motion, the thread's context and what it has found so far.
+class EdgeCheck {
+ public:
+  EdgeCheck(const Space& space, const std::vector<int>& body_component,
+            const std::vector<double>& body_radius, CollisionContext& context, const Config& from,
+            const Config& to)
+      : space_(space),
+        body_component_(body_component),
+        body_radius_(body_radius),
+        context_(context),
+        from_(from),
+        to_(to) {}
+
+  Config At(double t) const { return space_.Interpolate(from_, to_, t); }
+
+  // How far any point of the robot can move along the straight motion from a to b.
+  double MotionBound(const Config& a, const Config& b) const {
+    double bound = 0;
+    for (size_t i = 0; i < body_component_.size(); ++i) {
+      const int c = body_component_[i];
+      bound += space_.TranslationDistance(c, a, b) + body_radius_[i] * space_.RotationAngle(c, a, b);
+    }
+    return bound;
+  }
+
+  // Certifies the stretch between two profile samples, halving it while the certificate fails.
+  // Appends the midpoints it queries to `out` in order of t. Returns false if one collides.
+  bool Refine(const ClearanceSample& lo, const Config& q_lo, const ClearanceSample& hi,
+              const Config& q_hi, int depth, std::vector<ClearanceSample>& out) {
+    if (lo.clearance + hi.clearance > MotionBound(q_lo, q_hi)) return true;
+    if (depth == LocalPlanner::kMaxRefineDepth) {
+      certified_ = false;
+      return true;
+    }
+    const ClearanceSample mid{.t = 0.5 * (lo.t + hi.t)};
+    const Config q_mid = At(mid.t);
+    const double clearance = context_.Clearance(q_mid);
+    if (clearance <= 0) {
+      invalid_at_ = mid.t;
+      return false;
+    }
+    const ClearanceSample sample{.t = mid.t, .clearance = clearance};
+    if (!Refine(lo, q_lo, sample, q_mid, depth + 1, out)) return false;
+    out.push_back(sample);
+    return Refine(sample, q_mid, hi, q_hi, depth + 1, out);
+  }
+
+  bool certified() const { return certified_; }
+  double invalid_at() const { return invalid_at_; }
+
+ private:
+  const Space& space_;
+  const std::vector<int>& body_component_;
+  const std::vector<double>& body_radius_;
+  CollisionContext& context_;
+  const Config& from_;
+  const Config& to_;
+  bool certified_ = true;
+  double invalid_at_ = -1;
+};
+
+}  // namespace
+
+LocalPlanner::LocalPlanner(std::shared_ptr<const CollisionWorld> world, LocalPlannerOptions options)
+    : world_(std::move(world)), options_(options), impl_(std::make_unique<Impl>()) {
+  HGRAPH_CHECK(world_ != nullptr);
+  if (!std::isfinite(options_.resolution) || options_.resolution <= 0) {
+    throw InputError("resolution",
+                     "must be positive and finite, got " + std::to_string(options_.resolution));
+  }
+  const Scene& scene = world_->scene();
+  for (size_t i = 0; i < scene.robot.size(); ++i) {
+    impl_->body_component.push_back(scene.robot[i].component);
+    impl_->body_radius.push_back(world_->BodyRadius(static_cast<int>(i)));
+  }
+}
+
+LocalPlanner::~LocalPlanner() = default;
+
+const Space& LocalPlanner::space() const { return world_->space(); }
+
+int LocalPlanner::SampleCount(double length) const {
+  HGRAPH_CHECK(std::isfinite(length) && length >= 0);
+  const double step = options_.resolution * space().MaxExtent();
+  const double segments = step > 0 ? std::ceil(length / step) : 1.0;
+  HGRAPH_CHECK(segments < 1e9);
+  return std::max(1, static_cast<int>(segments)) + 1;
+}
+
+EdgeReport LocalPlanner::CheckEdge(const EdgeCheckRequest& request) const {
+  HGRAPH_CHECK(request.from != nullptr && request.to != nullptr);
+  const Space& s = space();
+  const Config& from = *request.from;
+  const Config& to = *request.to;
+  HGRAPH_CHECK(from.size() == s.dimension() && to.size() == s.dimension());
+
+  CollisionContext& context = impl_->Context(*world_);
+  const int64_t checks_before = context.collision_checks();
+  const int64_t queries_before = context.distance_queries();
+  EdgeReport report;
+  report.length = s.Distance(from, to);
+  const auto finish = [&]() {
+    report.collision_checks = context.collision_checks() - checks_before;
+    report.distance_queries = context.distance_queries() - queries_before;
+    impl_->collision_checks += report.collision_checks;
+    impl_->distance_queries += report.distance_queries;
+    return report;
+  };
+  const auto invalid = [&](double t) {
+    report.state = EdgeState::kInvalid;
+    report.invalid_at = t;
+    report.has_clearance = false;
+    report.profile.clear();
+    report.certified = false;
+    return finish();
+  };
+
+  const int segments = SampleCount(report.length) - 1;
+  EdgeCheck check(s, impl_->body_component, impl_->body_radius, context, from, to);
+  // Ends first: the end state is the one most likely to be new to the caller.
+  if (!context.Valid(to)) return invalid(1.0);
+  if (!context.Valid(from)) return invalid(0.0);
+  for (int k : BisectionOrder(segments)) {
+    const double t = static_cast<double>(k) / segments;
+    if (!context.Valid(check.At(t))) return invalid(t);
+  }
+  report.state = EdgeState::kValid;
+  if (!request.need_clearance) return finish();
+
+  std::vector<Config> grid;
+  std::vector<ClearanceSample> samples;
+  grid.reserve(segments + 1);
+  samples.reserve(segments + 1);
+  for (int k = 0; k <= segments; ++k) {
+    const double t = static_cast<double>(k) / segments;
+    grid.push_back(k == 0 ? from : k == segments ? to : check.At(t));
+    const double clearance = context.Clearance(grid.back());
+    // Touching contact: valid for FCL's collision test, but not free.
+    if (clearance <= 0) return invalid(t);
+    samples.push_back({.t = t, .clearance = clearance});
+  }
+  report.profile.reserve(samples.size());
+  for (int k = 0; k < segments; ++k) {
+    report.profile.push_back(samples[k]);
+    if (!check.Refine(samples[k], grid[k], samples[k + 1], grid[k + 1], 0, report.profile)) {
+      return invalid(check.invalid_at());
+    }
+  }
+  report.profile.push_back(samples.back());
+  report.has_clearance = true;
+  report.certified = check.certified();
+  return finish();
+}
+
+bool LocalPlanner::IsValid(const Config& q) const {
+  ++impl_->collision_checks;
+  return impl_->Context(*world_).Valid(q);
+}
+
+double LocalPlanner::Clearance(const Config& q) const {
+  ++impl_->distance_queries;
+  return impl_->Context(*world_).Clearance(q);
+}
+
+int64_t LocalPlanner::total_collision_checks() const { return impl_->collision_checks.load(); }
+int64_t LocalPlanner::total_distance_queries() const { return impl_->distance_queries.load(); }
+
+}  // namespace hgraph

@@ -1,0 +1,291 @@
+#include "core/motion/local_planner.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <random>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "core/common/error.h"
+
+namespace hgraph {
+namespace {
+
+Config Vec(std::initializer_list<double> values) {
+  Config q(static_cast<int>(values.size()));
+  int i = 0;
+  for (double v : values) q[i++] = v;
+  return q;
+}
+
+Obstacle Box(double x, double y, double sx, double sy) {
+  Obstacle o{.shape = Shape{.type = ShapeType::kBox, .box_size = Eigen::Vector3d(sx, sy, 1)}};
+  o.pose.translation() = Eigen::Vector3d(x, y, 0);
+  return o;
+}
+
+// A point robot in [0, 10]^2 (MaxExtent = 10 sqrt 2) with box obstacles.
+std::shared_ptr<const CollisionWorld> PointWorld(std::vector<Obstacle> obstacles) {
+  auto scene = std::make_shared<Scene>(Scene{
+      .name = "boxes",
+      .space = Space::RealVector(Eigen::Vector2d(0, 0), Eigen::Vector2d(10, 10)),
+      .obstacles = std::move(obstacles),
+  });
+  scene->robot.push_back(RobotBody{.shape = Shape{.type = ShapeType::kSphere, .radius = 0}});
+  return std::make_shared<CollisionWorld>(scene);
+}
+
+// The OMPL circle discs, with a 2 x 0.6 rectangle turning in SE(2): the certificate must account
+// for rotation (BodyRadius), not only translation.
+std::shared_ptr<const CollisionWorld> CircleWorld() {
+  std::ifstream in(std::string(HGRAPH_SHARED_DATA_DIR) + "/ompl-2d/circle_obstacles.txt");
+  EXPECT_TRUE(in.good());
+  std::string line;
+  std::getline(in, line);
+  std::getline(in, line);
+  auto scene = std::make_shared<Scene>(Scene{
+      .name = "circles",
+      .space = Space::SE2(Eigen::Vector2d(0, -5), Eigen::Vector2d(70, 70)),
+  });
+  int id;
+  double x, y, r;
+  while (in >> id >> x >> y >> r) {
+    Obstacle o{.shape = Shape{.type = ShapeType::kCylinder, .radius = r, .length = 2}};
+    o.pose.translation() = Eigen::Vector3d(x, y, 0);
+    scene->obstacles.push_back(o);
+  }
+  RobotBody body{.shape = Shape{.type = ShapeType::kBox, .box_size = Eigen::Vector3d(2, 0.6, 1)}};
+  body.offset.translation() = Eigen::Vector3d(0.5, 0, 0);  // turns about a point off its centre
+  scene->robot.push_back(body);
+  return std::make_shared<CollisionWorld>(scene);
+}
+
+EdgeReport Check(const LocalPlanner& planner, const Config& from, const Config& to,
+                 bool need_clearance = false) {
+  return planner.CheckEdge({.from = &from, .to = &to, .need_clearance = need_clearance});
+}
+
+TEST(LocalPlannerTest, RejectsBadResolution) {
+  const auto world = PointWorld({});
+  for (double bad : {0.0, -0.1, std::nan("")}) {
+    try {
+      LocalPlanner planner(world, {.resolution = bad});
+      ADD_FAILURE() << bad;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.field(), "resolution");
+    }
+  }
+}
+
+TEST(LocalPlannerTest, EdgeThroughAnObstacleIsInvalidInside) {
+  const LocalPlanner planner(PointWorld({Box(5, 5, 2, 2)}));
+  const Config from = Vec({1, 5}), to = Vec({9, 5});
+  const EdgeReport report = Check(planner, from, to);
+  EXPECT_EQ(report.state, EdgeState::kInvalid);
+  EXPECT_GT(report.invalid_at, 0.0);
+  EXPECT_LT(report.invalid_at, 1.0);
+  const double x = 1 + 8 * report.invalid_at;  // where the blocked sample lies
+  EXPECT_GE(x, 4.0);
+  EXPECT_LE(x, 6.0);
+  EXPECT_DOUBLE_EQ(report.length, 8.0);
+  // The first interior sample checked is the grid point nearest the middle (29 of 57 segments),
+  // inside the box: the two ends and one more check.
+  EXPECT_EQ(report.collision_checks, 3);
+  EXPECT_DOUBLE_EQ(report.invalid_at, 29.0 / 57.0);
+}
+
+TEST(LocalPlannerTest, FreeEdgeIsValidAndChecksEverySample) {
+  const LocalPlanner planner(PointWorld({Box(5, 5, 2, 2)}), {.resolution = 0.01});
+  const Config from = Vec({1, 1}), to = Vec({9, 1});
+  const EdgeReport report = Check(planner, from, to);
+  EXPECT_EQ(report.state, EdgeState::kValid);
+  EXPECT_EQ(report.invalid_at, -1);
+  EXPECT_FALSE(report.has_clearance);
+  EXPECT_TRUE(report.profile.empty());
+  // Step 0.01 * 10 sqrt 2 = 0.1414: 8 / 0.1414 -> 57 segments, 58 samples.
+  EXPECT_EQ(planner.SampleCount(8.0), 58);
+  EXPECT_EQ(report.collision_checks, 58);
+  EXPECT_EQ(report.distance_queries, 0);
+}
+
+TEST(LocalPlannerTest, SampleCountFollowsResolution) {
+  const auto world = PointWorld({});
+  const double extent = world->space().MaxExtent();
+  for (double resolution : {0.5, 0.1, 0.01, 0.003}) {
+    const LocalPlanner planner(world, {.resolution = resolution});
+    const double step = resolution * extent;
+    EXPECT_EQ(planner.SampleCount(0.0), 2);
+    EXPECT_EQ(planner.SampleCount(0.5 * step), 2);
+    EXPECT_EQ(planner.SampleCount(3 * step * (1 - 1e-12)), 4);
+    EXPECT_EQ(planner.SampleCount(3 * step * (1 + 1e-9)), 5);
+    const Config from = Vec({0.5, 0.5}), to = Vec({9.5, 9.5});
+    const EdgeReport report = Check(planner, from, to);
+    EXPECT_EQ(report.collision_checks, planner.SampleCount(report.length)) << resolution;
+  }
+}
+
+TEST(LocalPlannerTest, EndStateIsCheckedFirst) {
+  const LocalPlanner planner(PointWorld({Box(5, 5, 2, 2)}), {.resolution = 0.001});
+  const Config free = Vec({1, 5}), blocked = Vec({5, 5});
+  const EdgeReport into = Check(planner, free, blocked, true);
+  EXPECT_EQ(into.state, EdgeState::kInvalid);
+  EXPECT_EQ(into.invalid_at, 1.0);
+  EXPECT_LE(into.collision_checks, 2);
+  EXPECT_EQ(into.distance_queries, 0);
+  const EdgeReport out_of = Check(planner, blocked, free, true);
+  EXPECT_EQ(out_of.state, EdgeState::kInvalid);
+  EXPECT_EQ(out_of.invalid_at, 0.0);
+  EXPECT_LE(out_of.collision_checks, 2);
+}
+
+TEST(LocalPlannerTest, ClearanceProfileIsSortedWithBothEnds) {
+  const auto world = PointWorld({Box(5, 5, 2, 2)});
+  const LocalPlanner planner(world, {.resolution = 0.05});
+  const Config from = Vec({1, 2}), to = Vec({9, 3.5});
+  const EdgeReport report = Check(planner, from, to, true);
+  ASSERT_EQ(report.state, EdgeState::kValid);
+  ASSERT_TRUE(report.has_clearance);
+  ASSERT_GE(report.profile.size(), 2u);
+  EXPECT_EQ(report.profile.front().t, 0.0);
+  EXPECT_EQ(report.profile.back().t, 1.0);
+  auto context = world->MakeContext();
+  for (size_t i = 0; i < report.profile.size(); ++i) {
+    if (i > 0) {
+      EXPECT_LT(report.profile[i - 1].t, report.profile[i].t);
+    }
+    const ClearanceSample& s = report.profile[i];
+    EXPECT_GT(s.clearance, 0.0);
+    EXPECT_DOUBLE_EQ(s.clearance, context->Clearance(world->space().Interpolate(from, to, s.t)));
+  }
+  EXPECT_EQ(report.distance_queries, static_cast<int64_t>(report.profile.size()));
+  EXPECT_GE(report.profile.size(), static_cast<size_t>(planner.SampleCount(report.length)));
+}
+
+TEST(LocalPlannerTest, EdgesInOpenSpaceAreCertifiedWithoutRefinement) {
+  const LocalPlanner planner(PointWorld({Box(9.5, 9.5, 0.5, 0.5)}), {.resolution = 0.02});
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> coord(0.5, 6);
+  for (int i = 0; i < 50; ++i) {
+    const Config from = Vec({coord(rng), coord(rng)}), to = Vec({coord(rng), coord(rng)});
+    const EdgeReport report = Check(planner, from, to, true);
+    ASSERT_EQ(report.state, EdgeState::kValid);
+    EXPECT_TRUE(report.certified);
+    EXPECT_EQ(report.profile.size(), static_cast<size_t>(planner.SampleCount(report.length)));
+  }
+}
+
+TEST(LocalPlannerTest, ThinObstacleMissedBySamplesIsCaughtByRefinement) {
+  // A wall 0.05 thick at x = 3; at resolution 0.5 the samples of the edge are x = 1, 5, 9.
+  const LocalPlanner planner(PointWorld({Box(3, 5, 0.05, 4)}), {.resolution = 0.5});
+  const Config from = Vec({1, 5}), to = Vec({9, 5});
+  ASSERT_EQ(planner.SampleCount(8.0), 3);
+  const EdgeReport unchecked_between = Check(planner, from, to, false);
+  EXPECT_EQ(unchecked_between.state, EdgeState::kValid);
+  const EdgeReport refined = Check(planner, from, to, true);
+  EXPECT_EQ(refined.state, EdgeState::kInvalid);
+  EXPECT_DOUBLE_EQ(refined.invalid_at, 0.25);
+  EXPECT_FALSE(refined.has_clearance);
+  EXPECT_FALSE(refined.certified);
+}
+
+TEST(LocalPlannerTest, CertifiedEdgesAreFreeWhenCheckedDensely) {
+  const auto world = CircleWorld();
+  const LocalPlanner planner(world, {.resolution = 0.02});
+  auto dense = world->MakeContext();
+  std::mt19937_64 rng(3);
+  int certified = 0, uncertified = 0, caught = 0;
+  for (int i = 0; i < 300; ++i) {
+    const Config from = world->space().Sample(rng);
+    // Short hops, so that most edges are valid.
+    Config to = world->space().Sample(rng);
+    to.head<2>() = from.head<2>() + 0.15 * (to.head<2>() - from.head<2>());
+    const EdgeReport report = Check(planner, from, to, true);
+    const EdgeReport plain = Check(planner, from, to, false);
+    if (plain.state == EdgeState::kValid && report.state == EdgeState::kInvalid) ++caught;
+    if (report.state != EdgeState::kValid) continue;
+    if (!report.certified) {
+      ++uncertified;
+      continue;
+    }
+    ++certified;
+    for (int k = 0; k <= 2000; ++k) {
+      ASSERT_TRUE(dense->Valid(world->space().Interpolate(from, to, k / 2000.0)))
+          << "certified edge " << i << " collides at t = " << k / 2000.0;
+    }
+  }
+  EXPECT_GT(certified, 30);
+  std::printf("[ circles ] %d certified, %d valid but uncertified, %d caught only by refinement\n",
+              certified, uncertified, caught);
+}
+
+TEST(LocalPlannerTest, CountersAddUp) {
+  const LocalPlanner planner(PointWorld({Box(5, 5, 2, 2)}));
+  const Config a = Vec({1, 1}), b = Vec({9, 1}), c = Vec({5, 5});
+  int64_t checks = 0, queries = 0;
+  for (const auto& [from, to] : {std::pair{a, b}, std::pair{a, c}, std::pair{b, a}}) {
+    const EdgeReport report = Check(planner, from, to, true);
+    checks += report.collision_checks;
+    queries += report.distance_queries;
+  }
+  EXPECT_TRUE(planner.IsValid(a));
+  EXPECT_GT(planner.Clearance(a), 0.0);
+  EXPECT_EQ(planner.total_collision_checks(), checks + 1);
+  EXPECT_EQ(planner.total_distance_queries(), queries + 1);
+}
+
+void ExpectSameReport(const EdgeReport& a, const EdgeReport& b, int edge) {
+  EXPECT_EQ(a.state, b.state) << edge;
+  EXPECT_EQ(a.invalid_at, b.invalid_at) << edge;
+  EXPECT_EQ(a.certified, b.certified) << edge;
+  EXPECT_EQ(a.has_clearance, b.has_clearance) << edge;
+  EXPECT_EQ(a.collision_checks, b.collision_checks) << edge;
+  EXPECT_EQ(a.distance_queries, b.distance_queries) << edge;
+  ASSERT_EQ(a.profile.size(), b.profile.size()) << edge;
+  for (size_t k = 0; k < a.profile.size(); ++k) {
+    EXPECT_EQ(a.profile[k].t, b.profile[k].t) << edge;
+    EXPECT_EQ(a.profile[k].clearance, b.profile[k].clearance) << edge;
+  }
+}
+
+TEST(LocalPlannerThreadTest, ParallelChecksAgreeWithSerial) {
+  const auto world = CircleWorld();
+  std::mt19937_64 rng(17);
+  std::vector<std::pair<Config, Config>> edges;
+  for (int i = 0; i < 400; ++i) {
+    const Config from = world->space().Sample(rng);
+    Config to = world->space().Sample(rng);
+    to.head<2>() = from.head<2>() + 0.2 * (to.head<2>() - from.head<2>());
+    edges.emplace_back(from, to);
+  }
+  std::vector<EdgeReport> serial;
+  {
+    const LocalPlanner planner(world, {.resolution = 0.01});
+    for (size_t i = 0; i < edges.size(); ++i) {
+      serial.push_back(Check(planner, edges[i].first, edges[i].second, i % 2 == 0));
+    }
+  }
+  const LocalPlanner planner(world, {.resolution = 0.01});
+  std::vector<EdgeReport> parallel(edges.size());
+  const auto work = [&](size_t first) {
+    for (size_t i = first; i < edges.size(); i += 2) {
+      parallel[i] = Check(planner, edges[i].first, edges[i].second, i % 2 == 0);
+    }
+  };
+  std::thread t0(work, 0), t1(work, 1);
+  t0.join();
+  t1.join();
+  int64_t checks = 0, queries = 0;
+  for (size_t i = 0; i < edges.size(); ++i) {
+    ExpectSameReport(parallel[i], serial[i], static_cast<int>(i));
+    checks += serial[i].collision_checks;
+    queries += serial[i].distance_queries;
+  }
+  EXPECT_EQ(planner.total_collision_checks(), checks);
+  EXPECT_EQ(planner.total_distance_queries(), queries);
+}
+
+}  // namespace
+}  // namespace hgraph
