@@ -1,0 +1,101 @@
+#include "client/cli/cli_common.h"
+
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+
+#include "core/adapter/scene_proto.h"
+
+namespace hgraph::cli {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+constexpr auto kTtyInterval = std::chrono::milliseconds(100);
+constexpr auto kLogInterval = std::chrono::seconds(1);
+
+std::string ProblemText(const Error& e) {
+  const std::string what = e.what();
+  const std::string prefix = e.field() + ": ";
+  if (!e.field().empty() && what.starts_with(prefix)) return what.substr(prefix.size());
+  return what;
+}
+
+}  // namespace
+
+LoadedScene LoadScene(v1::Scene proto, const std::string& path, double resolution) {
+  LoadedScene loaded;
+  loaded.proto = std::move(proto);
+  loaded.scene = SceneFromProto(loaded.proto, std::filesystem::path(path).parent_path().string(),
+                                BlobResolver());
+  loaded.resolution = resolution;
+  loaded.world = std::make_shared<const CollisionWorld>(loaded.scene);
+  loaded.planner = std::make_unique<LocalPlanner>(
+      loaded.world, LocalPlannerOptions{.resolution = resolution});
+  return loaded;
+}
+
+ProgressPrinter::ProgressPrinter(bool enabled)
+    : enabled_(enabled), tty_(isatty(fileno(stderr)) != 0) {}
+
+ProgressPrinter::~ProgressPrinter() { Finish(); }
+
+ProgressCallback ProgressPrinter::callback() {
+  if (!enabled_) return {};
+  return [this](const Progress& progress) { Report(progress); };
+}
+
+void ProgressPrinter::Finish() {
+  std::lock_guard lock(mutex_);
+  if (line_open_) std::fputc('\n', stderr);
+  line_open_ = false;
+}
+
+void ProgressPrinter::Report(const Progress& progress) {
+  std::lock_guard lock(mutex_);
+  const auto now = Clock::now();
+  const bool new_phase = progress.phase != phase_;
+  const bool last = progress.done == progress.total;
+  if (!new_phase && !last && now - last_print_ < (tty_ ? kTtyInterval : kLogInterval)) return;
+  // On a log, the end of a phase is implied by the next one starting.
+  if (!tty_ && !new_phase && last) return;
+  phase_ = progress.phase;
+  last_print_ = now;
+  char line[256];
+  std::snprintf(line, sizeof(line),
+                "[%-9s] %lld/%lld  collision checks %lld  distance queries %lld  %.1f s",
+                progress.phase.c_str(), static_cast<long long>(progress.done),
+                static_cast<long long>(progress.total),
+                static_cast<long long>(progress.collision_checks),
+                static_cast<long long>(progress.distance_queries), progress.elapsed_ms / 1000.0);
+  if (tty_) {
+    if (new_phase && line_open_) std::fputc('\n', stderr);
+    std::fprintf(stderr, "\r\033[K%s", line);
+    line_open_ = true;
+  } else {
+    std::fprintf(stderr, "%s\n", line);
+  }
+  std::fflush(stderr);
+}
+
+void RethrowWithFlag(const Error& e, const std::map<std::string, std::string>& flags) {
+  const auto it = flags.find(e.field());
+  if (it == flags.end()) throw;
+  throw Error(e.code(), e.field() + " (" + it->second + ")", ProblemText(e));
+}
+
+std::string Cell(double v, int width, int precision) {
+  char text[64];
+  if (std::isnan(v)) {
+    std::snprintf(text, sizeof(text), "%*s", width, "-");
+  } else if (std::isinf(v)) {
+    std::snprintf(text, sizeof(text), "%*s", width, v > 0 ? "inf" : "-inf");
+  } else {
+    std::snprintf(text, sizeof(text), "%*.*f", width, precision, v);
+  }
+  return text;
+}
+
+}  // namespace hgraph::cli

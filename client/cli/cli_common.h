@@ -1,0 +1,67 @@
+// Helpers shared by the subcommands: loading a scene with its checker, progress on stderr, and
+// number formatting for the human-readable tables.
+#pragma once
+
+#include <chrono>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+
+#include "core/collision/collision_world.h"
+#include "core/common/error.h"
+#include "core/common/progress.h"
+#include "core/motion/local_planner.h"
+#include "core/scene/scene.h"
+#include "hgraph/v1/scene.pb.h"
+
+namespace hgraph::cli {
+
+// A scene file loaded and ready to check motions in. Not copyable (the planner points into the
+// collision world).
+struct LoadedScene {
+  v1::Scene proto;
+  std::shared_ptr<const Scene> scene;
+  std::shared_ptr<const CollisionWorld> world;
+  std::unique_ptr<LocalPlanner> planner;
+  double resolution = 0;
+};
+
+// Builds the scene read from `path` (meshes relative to its folder), its collision world and a
+// local planner at `resolution`. The proto is read first (ReadSceneFile) so that the caller can
+// choose the resolution from it.
+LoadedScene LoadScene(v1::Scene proto, const std::string& path, double resolution);
+
+// Prints progress reports on stderr. On a terminal one line is redrawn in place; otherwise
+// (logs, CI) a plain line is written when a phase starts and then at most once a second.
+// Thread safe: the engine reports from its worker threads.
+class ProgressPrinter {
+ public:
+  explicit ProgressPrinter(bool enabled);
+  ~ProgressPrinter();
+  ProgressPrinter(const ProgressPrinter&) = delete;
+  ProgressPrinter& operator=(const ProgressPrinter&) = delete;
+
+  ProgressCallback callback();
+  // Ends the redrawn line, if any, so that later output starts on a fresh line.
+  void Finish();
+
+ private:
+  void Report(const Progress& progress);
+
+  bool enabled_;
+  bool tty_;
+  std::mutex mutex_;
+  std::string phase_;
+  std::chrono::steady_clock::time_point last_print_;
+  bool line_open_ = false;
+};
+
+// Rethrows an InputError about a proto field set from a flag so that it names both
+// ("measure.k (--k)"); other errors are rethrown unchanged. Call only from a catch block.
+[[noreturn]] void RethrowWithFlag(const Error& e, const std::map<std::string, std::string>& flags);
+
+// Fixed-width number for tables: "inf" for infinity, "-" for NaN.
+std::string Cell(double v, int width, int precision = 4);
+
+}  // namespace hgraph::cli

@@ -1,0 +1,48 @@
+#include <cstdio>
+#include <exception>
+#include <vector>
+
+#include "client/cli/command.h"
+#include "core/common/error.h"
+
+int main(int argc, char** argv) {
+  using namespace hgraph::cli;
+  CLI::App app("hgraph: merge motion paths into one path of higher quality (H-Graph path "
+               "hybridization)",
+               "hgraph");
+  app.require_subcommand(1);
+  std::vector<Subcommand> subcommands = {
+      AddMergeCommand(app),
+      AddCheckCommand(app),
+  };
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::fprintf(stderr, "error: %s (see hgraph --help)\n", e.what());
+    return kExitBadInput;
+  }
+
+  // Every failure leaves through here with a one-line message; the engine never aborts on input.
+  try {
+    for (const Subcommand& sub : subcommands) {
+      if (sub.app->parsed()) return sub.run();
+    }
+  } catch (const hgraph::Error& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return kExitBadInput;
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "error: out of memory\n");
+    return kExitBadInput;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return kExitBadInput;
+  }
+  return kExitBadInput;
+}

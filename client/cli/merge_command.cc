@@ -1,0 +1,195 @@
+// `hgraph merge`: merge input paths in process and write the MergeResult JSON.
+#include <cstdio>
+#include <map>
+#include <string>
+
+#include "client/cli/cli_common.h"
+#include "client/cli/command.h"
+#include "core/adapter/json_io.h"
+#include "core/adapter/merge_proto.h"
+#include "core/adapter/path_io.h"
+#include "core/adapter/scene_proto.h"
+#include "core/hgraph/bridge_candidates.h"
+#include "core/measure/measure.h"
+#include "core/merge/merge.h"
+
+namespace hgraph::cli {
+namespace {
+
+struct MergeFlags {
+  std::string scene;
+  std::string paths;
+  std::string out;
+  std::string out_path;
+  std::string variant = "edit-distance";
+  std::string measure = "length";
+  double radius = 0;
+  int phi = 0;
+  double gap_init = 0;
+  double gap_extend = 0;
+  double k = 0;
+  double safety = 0;
+  double resolution = 0;
+  double endpoint_tolerance = 0;
+  int threads = 0;
+  bool quiet = false;
+  // Set when the flag was given; unset flags leave the proto field unset (core defaults).
+  CLI::Option* radius_opt = nullptr;
+  CLI::Option* phi_opt = nullptr;
+  CLI::Option* gap_init_opt = nullptr;
+  CLI::Option* gap_extend_opt = nullptr;
+  CLI::Option* k_opt = nullptr;
+  CLI::Option* resolution_opt = nullptr;
+  CLI::Option* endpoint_tolerance_opt = nullptr;
+};
+
+// The proto fields each flag fills, so that errors name the flag as well.
+const std::map<std::string, std::string>& FlagNames() {
+  static const std::map<std::string, std::string> names = {
+      {"measure.k", "--k"},
+      {"measure.safety", "--safety"},
+      {"options.radius", "--radius"},
+      {"options.phi", "--phi"},
+      {"options.gap_init", "--gap-init"},
+      {"options.gap_extend", "--gap-extend"},
+      {"options.resolution", "--resolution"},
+      {"options.threads", "--threads"},
+      {"options.endpoint_tolerance", "--endpoint-tolerance"},
+  };
+  return names;
+}
+
+// Builds the request messages the service would receive, so the CLI and the service share one
+// validation path (core/adapter).
+void BuildProtos(const MergeFlags& f, v1::Measure* measure, v1::MergeOptions* options) {
+  *measure = MeasureToProto(MeasureSpec{.type = ParseMeasureType(f.measure, "--measure")});
+  measure->clear_k();
+  if (f.k_opt->count() > 0) measure->set_k(f.k);
+  measure->set_safety(f.safety);
+  options->set_variant(VariantToProto(ParseVariant(f.variant, "--variant")));
+  if (f.radius_opt->count() > 0) options->set_radius(f.radius);
+  if (f.phi_opt->count() > 0) options->set_phi(f.phi);
+  if (f.gap_init_opt->count() > 0) options->set_gap_init(f.gap_init);
+  if (f.gap_extend_opt->count() > 0) options->set_gap_extend(f.gap_extend);
+  if (f.resolution_opt->count() > 0) options->set_resolution(f.resolution);
+  if (f.endpoint_tolerance_opt->count() > 0) options->set_endpoint_tolerance(f.endpoint_tolerance);
+  options->set_threads(f.threads);
+}
+
+void PrintQualityRow(const std::string& name, int waypoints, bool valid,
+                     const PathQuality& q) {
+  std::printf("%-20.20s %9d %5s %12s %10s %10s %14s\n", name.c_str(), waypoints,
+              valid ? "yes" : "NO", Cell(q.length, 12).c_str(), Cell(q.min_clearance, 10).c_str(),
+              Cell(q.avg_clearance, 10).c_str(), Cell(q.inverse_clearance, 14).c_str());
+}
+
+void PrintResult(const MergeResult& r) {
+  std::printf("%-20s %9s %5s %12s %10s %10s %14s\n", "path", "waypoints", "valid", "length",
+              "min clear", "avg clear", ("inv clear k=" + Cell(r.quality.k, 0, 3)).c_str());
+  for (const InputReport& input : r.inputs) {
+    PrintQualityRow(input.name, input.waypoints, input.valid, input.quality);
+  }
+  PrintQualityRow("merged", static_cast<int>(r.path.waypoints.size()), true, r.quality);
+  for (const InputReport& input : r.inputs) {
+    if (!input.valid) {
+      std::printf("  %s: edge %d invalid: %s\n", input.name.c_str(), input.invalid_edge,
+                  input.invalid_reason.c_str());
+    }
+  }
+  std::printf("measure %s (%s variant): objective %s", MeasureTypeName(r.measure.type),
+              VariantName(r.variant), Cell(r.objective, 0).c_str());
+  if (r.best_input >= 0 && r.best_input < static_cast<int>(r.inputs.size())) {
+    std::printf(", best input '%s' %s", r.inputs[r.best_input].name.c_str(),
+                Cell(r.best_input_objective, 0).c_str());
+  }
+  std::printf("\n");
+  const MergeStats& s = r.stats;
+  std::printf(
+      "stats: %lld nodes, %lld input edges (%lld invalid), %lld candidates, %lld edges checked, "
+      "%lld valid, %lld reused, %lld collision checks, %lld distance queries, %d threads\n",
+      static_cast<long long>(s.nodes), static_cast<long long>(s.input_edges),
+      static_cast<long long>(s.input_edges_invalid), static_cast<long long>(s.candidate_edges),
+      static_cast<long long>(s.edges_checked), static_cast<long long>(s.edges_valid),
+      static_cast<long long>(s.edges_reused), static_cast<long long>(s.collision_checks),
+      static_cast<long long>(s.distance_queries), s.threads);
+  const MergeTiming& t = r.timing;
+  std::printf(
+      "timing (ms): validate %.1f, inputs %.1f, align %.1f, candidates %.1f, check %.1f, "
+      "search %.1f, evaluate %.1f, total %.1f\n",
+      t.validate_ms, t.inputs_ms, t.align_ms, t.candidates_ms, t.check_ms, t.search_ms,
+      t.evaluate_ms, t.total_ms);
+}
+
+int RunMerge(const MergeFlags& f) {
+  v1::Measure measure_proto;
+  v1::MergeOptions options_proto;
+  MergeRequest request;
+  double resolution = 0;
+  v1::Scene scene_proto = ReadSceneFile(f.scene);
+  try {
+    BuildProtos(f, &measure_proto, &options_proto);
+    request.measure = MeasureFromProto(measure_proto);
+    request.options = MergeOptionsFromProto(options_proto);
+    resolution = ResolutionFromProto(options_proto, scene_proto);
+  } catch (const Error& e) {
+    RethrowWithFlag(e, FlagNames());
+  }
+
+  const LoadedScene loaded = LoadScene(std::move(scene_proto), f.scene, resolution);
+  request.paths = LoadPathsFile(f.paths, loaded.scene->space);
+
+  ProgressPrinter printer(!f.quiet);
+  request.progress = printer.callback();
+  const MergeResult result = Merge(*loaded.planner, request);
+  printer.Finish();
+
+  if (!f.out.empty()) WriteTextFile(f.out, ToJson(MergeResultToProto(result)));
+  if (!f.out_path.empty()) WritePathsFile(f.out_path, {result.path});
+  PrintResult(result);
+  return kExitOk;
+}
+
+}  // namespace
+
+Subcommand AddMergeCommand(CLI::App& parent) {
+  auto flags = std::make_shared<MergeFlags>();
+  MergeFlags& f = *flags;
+  CLI::App* app = parent.add_subcommand(
+      "merge", "Merge input paths into one path of higher quality (in process).");
+  app->add_option("--scene", f.scene, "Scene JSON (hgraph.v1.Scene)")->required();
+  app->add_option("--paths", f.paths,
+                  "Input paths: PathSet JSON, or OMPL text (one configuration per line, blank "
+                  "lines between paths)")
+      ->required();
+  app->add_option("--out", f.out, "Write the MergeResult JSON here");
+  app->add_option("--out-path", f.out_path,
+                  "Write the merged path here (.json: PathSet; otherwise OMPL text)");
+  app->add_option("--variant", f.variant,
+                  "H-Graph variant: all-pairs, neighborhood, knn, edit-distance, "
+                  "edit-distance-neighborhood")
+      ->capture_default_str();
+  f.radius_opt = app->add_option("--radius", f.radius,
+                                 "Neighbourhood threshold D (default: 2 x mean input edge length)");
+  f.phi_opt = app->add_option("--phi", f.phi, "Neighbours per node for knn (default 5)");
+  f.gap_init_opt = app->add_option("--gap-init", f.gap_init,
+                                   "Alignment gap opening penalty (default: 2 x gap-extend)");
+  f.gap_extend_opt = app->add_option("--gap-extend", f.gap_extend,
+                                     "Alignment gap extension penalty (default: mean input edge "
+                                     "length)");
+  app->add_option("--measure", f.measure,
+                  "Quality measure: length, inverse-clearance, bottleneck-clearance, safe-length")
+      ->capture_default_str();
+  f.k_opt = app->add_option("--k", f.k, "Inverse-clearance exponent (default 3)");
+  app->add_option("--safety", f.safety, "Minimum clearance C for safe-length");
+  f.resolution_opt = app->add_option(
+      "--resolution", f.resolution,
+      "Local-planner resolution, fraction of the space's extent (default: the scene's, or 0.01)");
+  f.endpoint_tolerance_opt = app->add_option(
+      "--endpoint-tolerance", f.endpoint_tolerance,
+      "Largest distance between inputs' start (goal) waypoints (default 1e-6)");
+  app->add_option("--threads", f.threads, "Worker threads (0 = all cores)")->capture_default_str();
+  app->add_flag("-q,--quiet", f.quiet, "No progress on stderr");
+  return Subcommand{.app = app, .run = [flags] { return RunMerge(*flags); }};
+}
+
+}  // namespace hgraph::cli
