@@ -1,0 +1,231 @@
+// Property tests of the whole merge on a real scene (FCL, the local planner): for every variant
+// and measure, the merged path is valid, keeps the endpoints and is never worse than the best
+// valid input.
+#include "core/merge/merge.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "core/collision/collision_world.h"
+#include "core/common/error.h"
+#include "core/motion/local_planner.h"
+#include "tests/unit/test_scenes.h"
+
+namespace hgraph {
+namespace {
+
+using testing::CirclePaths;
+using testing::CirclesScene;
+
+class MergeTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() { world_ = new std::shared_ptr<const CollisionWorld>(
+      std::make_shared<CollisionWorld>(CirclesScene())); }
+  static void TearDownTestSuite() {
+    delete world_;
+    world_ = nullptr;
+  }
+  LocalPlanner MakePlanner() const { return LocalPlanner(*world_); }
+  // Every edge of the path passes the local planner.
+  static void ExpectValid(const LocalPlanner& planner, const InputPath& path) {
+    for (size_t j = 0; j + 1 < path.waypoints.size(); ++j) {
+      const EdgeReport r = planner.CheckEdge(
+          {.from = &path.waypoints[j], .to = &path.waypoints[j + 1], .need_clearance = false});
+      EXPECT_EQ(r.state, EdgeState::kValid) << "edge " << j;
+    }
+  }
+  // Random variations of the OMPL paths: interior waypoints moved while every edge stays valid.
+  std::vector<InputPath> PerturbedPaths(const LocalPlanner& planner, uint64_t seed, int count) {
+    std::mt19937_64 rng(seed);
+    std::normal_distribution<double> jitter(0.0, 2.0);
+    const std::vector<InputPath> base = CirclePaths();
+    std::vector<InputPath> out;
+    for (int c = 0; c < count; ++c) {
+      InputPath path = base[c % base.size()];
+      path.name = "perturbed" + std::to_string(c);
+      for (size_t j = 1; j + 1 < path.waypoints.size(); ++j) {
+        for (int attempt = 0; attempt < 20; ++attempt) {
+          Config moved = path.waypoints[j] + Eigen::Vector2d(jitter(rng), jitter(rng));
+          const EdgeReport a =
+              planner.CheckEdge({.from = &path.waypoints[j - 1], .to = &moved});
+          const EdgeReport b =
+              planner.CheckEdge({.from = &moved, .to = &path.waypoints[j + 1]});
+          if (a.state == EdgeState::kValid && b.state == EdgeState::kValid) {
+            path.waypoints[j] = moved;
+            break;
+          }
+        }
+      }
+      out.push_back(path);
+    }
+    return out;
+  }
+
+  static std::shared_ptr<const CollisionWorld>* world_;
+};
+
+std::shared_ptr<const CollisionWorld>* MergeTest::world_ = nullptr;
+
+TEST_F(MergeTest, OmplCirclePathsMergeIntoAShorterValidPath) {
+  const LocalPlanner planner = MakePlanner();
+  const std::vector<InputPath> inputs = CirclePaths();
+  ASSERT_EQ(inputs.size(), 2u);
+  const MergeResult r = Merge(planner, MergeRequest{.paths = inputs});
+  ASSERT_EQ(r.inputs.size(), 2u);
+  EXPECT_TRUE(r.inputs[0].valid);
+  EXPECT_TRUE(r.inputs[1].valid);
+  EXPECT_LT(r.quality.length, r.inputs[0].quality.length);
+  EXPECT_LT(r.quality.length, r.inputs[1].quality.length);
+  ExpectValid(planner, r.path);
+  EXPECT_TRUE(r.path.waypoints.front().isApprox(inputs[0].waypoints.front()));
+  EXPECT_TRUE(r.path.waypoints.back().isApprox(inputs[0].waypoints.back()));
+  EXPECT_GT(r.quality.min_clearance, 0);
+  EXPECT_GT(r.stats.collision_checks, 0);
+  EXPECT_GT(r.stats.distance_queries, 0);
+}
+
+struct Case {
+  Variant variant;
+  MeasureSpec measure;
+};
+
+class MergePropertyTest : public MergeTest, public ::testing::WithParamInterface<uint64_t> {};
+
+TEST_P(MergePropertyTest, EveryVariantAndMeasureKeepsTheInvariants) {
+  const LocalPlanner planner = MakePlanner();
+  const std::vector<InputPath> inputs = PerturbedPaths(planner, GetParam(), 4);
+  const std::vector<MeasureSpec> measures = {
+      {.type = MeasureType::kLength},
+      {.type = MeasureType::kInverseClearance, .k = 3},
+      {.type = MeasureType::kInverseClearance, .k = 0.25},
+      {.type = MeasureType::kBottleneckClearance},
+      {.type = MeasureType::kSafeLength, .safety = 0.5},
+  };
+  for (const MeasureSpec& measure : measures) {
+    double all_pairs_objective = 0;
+    for (Variant variant : {Variant::kAllPairs, Variant::kNeighborhood, Variant::kKNearest,
+                            Variant::kEditDistance, Variant::kEditDistanceNeighborhood}) {
+      SCOPED_TRACE(std::string(VariantName(variant)) + " / " + MeasureTypeName(measure.type));
+      MergeResult r;
+      try {
+        r = Merge(planner, MergeRequest{.paths = inputs,
+                                        .measure = measure,
+                                        .options = {.candidates = {.variant = variant}}});
+      } catch (const Error& e) {
+        // Only a safety demand no input meets may fail, and then with the field named.
+        ASSERT_EQ(measure.type, MeasureType::kSafeLength) << e.what();
+        EXPECT_EQ(e.field(), "measure.safety");
+        continue;
+      }
+      ExpectValid(planner, r.path);
+      EXPECT_TRUE(r.path.waypoints.front().isApprox(inputs[0].waypoints.front()));
+      EXPECT_TRUE(r.path.waypoints.back().isApprox(inputs[0].waypoints.back()));
+      ASSERT_GE(r.best_input, 0);
+      EXPECT_LE(r.objective, r.best_input_objective + 1e-9);
+      for (const InputReport& input : r.inputs) {
+        if (input.valid) {
+          EXPECT_FALSE(Better(measure, input.quality, r.quality)) << input.name;
+        }
+      }
+      if (variant == Variant::kAllPairs) {
+        all_pairs_objective = r.objective;
+      } else {
+        EXPECT_LE(all_pairs_objective, r.objective + 1e-9) << "all-pairs is never worse";
+      }
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Seeds, MergePropertyTest, ::testing::Values(1, 2, 3));
+
+TEST_F(MergeTest, RequeryReusesEveryCheck) {
+  const LocalPlanner planner = MakePlanner();
+  HybridizationSession session(
+      planner, MergeRequest{.paths = CirclePaths(),
+                            .measure = {.type = MeasureType::kInverseClearance, .k = 3}});
+  const MergeResult first = session.Query({.type = MeasureType::kInverseClearance, .k = 3});
+  EXPECT_GT(first.stats.distance_queries, 0);
+  // Every valid edge already carries its clearance profile: nothing new to check.
+  const MergeResult second = session.Query({.type = MeasureType::kBottleneckClearance});
+  EXPECT_EQ(second.stats.collision_checks, 0);
+  EXPECT_EQ(second.stats.distance_queries, 0);
+  EXPECT_EQ(second.stats.edges_checked, 0);
+  EXPECT_GT(second.stats.edges_reused, 0);
+  EXPECT_GE(second.quality.min_clearance, first.quality.min_clearance - 1e-12);
+  const MergeResult third = session.Query({.type = MeasureType::kLength});
+  EXPECT_EQ(third.stats.collision_checks, 0);
+  EXPECT_LE(third.quality.length, second.quality.length + 1e-12);
+}
+
+TEST_F(MergeTest, LengthFirstThenClearancePaysOnlyForMissingProfiles) {
+  const LocalPlanner planner = MakePlanner();
+  HybridizationSession session(planner, MergeRequest{.paths = CirclePaths()});
+  const MergeResult first = session.Query({});
+  const MergeResult second = session.Query({.type = MeasureType::kInverseClearance, .k = 3});
+  EXPECT_GT(second.stats.distance_queries, 0);
+  EXPECT_GT(second.stats.edges_checked, 0);
+  const MergeResult third = session.Query({.type = MeasureType::kInverseClearance, .k = 1});
+  EXPECT_EQ(third.stats.distance_queries, 0);
+  EXPECT_EQ(third.stats.collision_checks, 0);
+  EXPECT_LE(first.quality.length, third.quality.length + 1e-12);
+}
+
+TEST_F(MergeTest, InvalidInputEdgeIsReportedAndNotUsed) {
+  const LocalPlanner planner = MakePlanner();
+  std::vector<InputPath> inputs = CirclePaths();
+  // Straight through the discs from start to goal.
+  inputs.push_back(InputPath{
+      .name = "straight",
+      .waypoints = {inputs[0].waypoints.front(), inputs[0].waypoints.back()}});
+  const MergeResult r = Merge(planner, MergeRequest{.paths = inputs});
+  ASSERT_EQ(r.inputs.size(), 3u);
+  EXPECT_FALSE(r.inputs[2].valid);
+  EXPECT_EQ(r.inputs[2].invalid_edge, 0);
+  EXPECT_EQ(r.stats.input_edges_invalid, 1);
+  ExpectValid(planner, r.path);
+  EXPECT_GT(r.path.waypoints.size(), 2u);
+}
+
+TEST_F(MergeTest, CancelStopsTheMerge) {
+  const LocalPlanner planner = MakePlanner();
+  MergeRequest request{.paths = CirclePaths(), .options = {.candidates = {.variant = Variant::kAllPairs}}};
+  request.cancel.Cancel();
+  try {
+    Merge(planner, request);
+    FAIL() << "expected cancellation";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kCancelled);
+  }
+}
+
+TEST_F(MergeTest, ProgressReachesTheTotal) {
+  const LocalPlanner planner = MakePlanner();
+  std::mutex mu;
+  std::map<std::string, std::pair<int64_t, int64_t>> last;
+  MergeRequest request{.paths = CirclePaths(),
+                       .options = {.candidates = {.variant = Variant::kAllPairs}, .threads = 2}};
+  request.progress = [&](const Progress& p) {
+    std::lock_guard<std::mutex> lock(mu);
+    auto& entry = last[p.phase];
+    entry.first = std::max(entry.first, p.done);
+    entry.second = p.total;
+  };
+  const MergeResult r = Merge(planner, request);
+  ASSERT_TRUE(last.count("check"));
+  EXPECT_EQ(last["check"].first, last["check"].second);
+  EXPECT_EQ(last["check"].second, r.stats.candidate_edges);
+}
+
+TEST_F(MergeTest, ThreadCountDoesNotChangeTheResult) {
+  const LocalPlanner planner = MakePlanner();
+  const std::vector<InputPath> inputs = PerturbedPaths(planner, 9, 3);
+  const MergeResult one = Merge(planner, MergeRequest{.paths = inputs, .options = {.threads = 1}});
+  const MergeResult two = Merge(planner, MergeRequest{.paths = inputs, .options = {.threads = 2}});
+  EXPECT_DOUBLE_EQ(one.quality.length, two.quality.length);
+  EXPECT_EQ(one.stats.edges_valid, two.stats.edges_valid);
+  EXPECT_EQ(one.stats.collision_checks, two.stats.collision_checks);
+}
+
+}  // namespace
+}  // namespace hgraph
