@@ -194,26 +194,39 @@ MergeResult HybridizationSession::Query(const MeasureSpec& measure,
   CheckEdges(recheck, true, "clearance", progress, cancel, &rechecked);
   result.timing.check_ms += MsSince(phase);
 
-  phase = Clock::now();
-  const SearchResult best = FindBestPath(graph_, measure);
-  result.timing.search_ms = MsSince(phase);
-  if (!best.found) {
-    if (measure.type == MeasureType::kSafeLength) {
-      throw Error(ErrorCode::kFailedPrecondition, "measure.safety",
-                  "no path in the H-Graph keeps clearance >= " + std::to_string(measure.safety));
+  // The output's own edges get clearance profiles so that every measure can be reported. The
+  // clearance check refines between samples and can find a collision the validity check missed;
+  // then the edge is invalid from now on and the search runs again.
+  SearchResult best;
+  double evaluate_ms = 0;
+  for (;;) {
+    phase = Clock::now();
+    best = FindBestPath(graph_, measure);
+    result.timing.search_ms += MsSince(phase);
+    if (!best.found) {
+      if (measure.type == MeasureType::kSafeLength) {
+        throw Error(ErrorCode::kFailedPrecondition, "measure.safety",
+                    "no path in the H-Graph keeps clearance >= " +
+                        std::to_string(measure.safety));
+      }
+      throw Error(ErrorCode::kFailedPrecondition, "paths",
+                  "the valid edges of the H-Graph do not connect start and goal (are the "
+                  "inputs valid?)");
     }
-    throw Error(ErrorCode::kFailedPrecondition, "paths",
-                "the valid edges of the H-Graph do not connect start and goal (are the inputs "
-                "valid?)");
+    phase = Clock::now();
+    std::vector<int> output_recheck;
+    for (int e : best.edges) {
+      if (!graph_.edge(e).report.has_clearance) output_recheck.push_back(e);
+    }
+    CheckEdges(output_recheck, true, "evaluate", progress, cancel, &rechecked);
+    evaluate_ms += MsSince(phase);
+    bool still_valid = true;
+    for (int e : output_recheck) {
+      still_valid = still_valid && graph_.edge(e).report.state == EdgeState::kValid;
+    }
+    if (still_valid) break;
   }
-
-  // The output's own edges get clearance profiles so that every measure can be reported.
   phase = Clock::now();
-  std::vector<int> output_recheck;
-  for (int e : best.edges) {
-    if (!graph_.edge(e).report.has_clearance) output_recheck.push_back(e);
-  }
-  CheckEdges(output_recheck, true, "evaluate", progress, cancel, &rechecked);
   result.quality = EvaluateEdges(graph_, best.edges, measure.k);
   for (int n : best.nodes) {
     const HNode& node = graph_.node(n);
@@ -262,7 +275,7 @@ MergeResult HybridizationSession::Query(const MeasureSpec& measure,
     result.inputs.push_back(std::move(report));
   }
   if (result.best_input >= 0) result.best_input_objective = Objective(measure, best_quality);
-  result.timing.evaluate_ms = MsSince(phase);
+  result.timing.evaluate_ms = evaluate_ms + MsSince(phase);
 
   const int64_t query_checks = checker_->total_collision_checks() - checks_before;
   const int64_t query_queries = checker_->total_distance_queries() - queries_before;
