@@ -58,7 +58,9 @@ class CollisionContext {
   // self-collision on, another body). Counts one collision check.
   bool Valid(const Config& q);
   // Minimum distance from the robot to the obstacles (and between bodies with self-collision
-  // on); 0 when in collision or out of bounds. Counts one distance query.
+  // on); 0 when in collision or out of bounds; +infinity when there is nothing to measure to.
+  // Counts one distance query. FCL meshes are surfaces: a body wholly inside a mesh obstacle is
+  // neither in collision nor at zero clearance (primitives are solid).
   double Clearance(const Config& q);
 
   int64_t collision_checks() const { return collision_checks_; }

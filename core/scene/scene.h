@@ -58,6 +58,7 @@ struct Scene {
   std::vector<Obstacle> obstacles;
   std::vector<RobotBody> robot;
   // Check pairs of robot bodies against each other (two wrenches must not hit each other).
+  // Bodies driven by the same component move as one rigid body and are not checked.
   bool self_collision = false;
   // Optional query the scene was built for (the built-in scenes carry one).
   std::optional<Config> start;
