@@ -45,9 +45,8 @@ std::string CheckPath(const LocalPlanner& planner, const InputPath& path, int in
         EdgeCheckRequest{.from = &path.waypoints[j], .to = &path.waypoints[j + 1]});
     if (report.state == EdgeState::kValid) continue;
     const double t = report.invalid_at >= 0 ? report.invalid_at : 0;
-    return Describe(path, index) + ": edge " + std::to_string(j) + " -> " +
-           std::to_string(j + 1) + " " +
-           InvalidWhy(space, path.waypoints[j], path.waypoints[j + 1], t);
+    return Describe(path, index) + ": edge " + std::to_string(j) + " -> " + std::to_string(j + 1) +
+           " " + InvalidWhy(space, path.waypoints[j], path.waypoints[j + 1], t);
   }
   return "";
 }
@@ -87,8 +86,9 @@ int RunCheck(const CheckFlags& f) {
       for (size_t j = 0; j + 1 < paths[i].waypoints.size(); ++j) {
         length += space.Distance(paths[i].waypoints[j], paths[i].waypoints[j + 1]);
       }
-      std::printf("%s: valid, %zu waypoints, length %.6g\n", Describe(paths[i], static_cast<int>(i)).c_str(),
-                  paths[i].waypoints.size(), length);
+      std::printf("%s: valid, %zu waypoints, length %.6g\n",
+                  Describe(paths[i], static_cast<int>(i)).c_str(), paths[i].waypoints.size(),
+                  length);
     } else {
       ++invalid;
       std::printf("%s\n", problem.c_str());

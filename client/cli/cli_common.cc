@@ -32,8 +32,8 @@ LoadedScene LoadScene(v1::Scene proto, const std::string& path, double resolutio
                                 BlobResolver());
   loaded.resolution = resolution;
   loaded.world = std::make_shared<const CollisionWorld>(loaded.scene);
-  loaded.planner = std::make_unique<LocalPlanner>(
-      loaded.world, LocalPlannerOptions{.resolution = resolution});
+  loaded.planner =
+      std::make_unique<LocalPlanner>(loaded.world, LocalPlannerOptions{.resolution = resolution});
   return loaded;
 }
 
@@ -64,12 +64,11 @@ void ProgressPrinter::Report(const Progress& progress) {
   phase_ = progress.phase;
   last_print_ = now;
   char line[256];
-  std::snprintf(line, sizeof(line),
-                "[%-9s] %lld/%lld  collision checks %lld  distance queries %lld  %.1f s",
-                progress.phase.c_str(), static_cast<long long>(progress.done),
-                static_cast<long long>(progress.total),
-                static_cast<long long>(progress.collision_checks),
-                static_cast<long long>(progress.distance_queries), progress.elapsed_ms / 1000.0);
+  std::snprintf(
+      line, sizeof(line), "[%-9s] %lld/%lld  collision checks %lld  distance queries %lld  %.1f s",
+      progress.phase.c_str(), static_cast<long long>(progress.done),
+      static_cast<long long>(progress.total), static_cast<long long>(progress.collision_checks),
+      static_cast<long long>(progress.distance_queries), progress.elapsed_ms / 1000.0);
   if (tty_) {
     if (new_phase && line_open_) std::fputc('\n', stderr);
     std::fprintf(stderr, "\r\033[K%s", line);

@@ -7,9 +7,10 @@
 
 int main(int argc, char** argv) {
   using namespace hgraph::cli;
-  CLI::App app("hgraph: merge motion paths into one path of higher quality (H-Graph path "
-               "hybridization)",
-               "hgraph");
+  CLI::App app(
+      "hgraph: merge motion paths into one path of higher quality (H-Graph path "
+      "hybridization)",
+      "hgraph");
   app.require_subcommand(1);
   std::vector<Subcommand> subcommands = {
       AddMergeCommand(app),

@@ -76,8 +76,7 @@ void BuildProtos(const MergeFlags& f, v1::Measure* measure, v1::MergeOptions* op
   options->set_threads(f.threads);
 }
 
-void PrintQualityRow(const std::string& name, int waypoints, bool valid,
-                     const PathQuality& q) {
+void PrintQualityRow(const std::string& name, int waypoints, bool valid, const PathQuality& q) {
   std::printf("%-20.20s %9d %5s %12s %10s %10s %14s\n", name.c_str(), waypoints,
               valid ? "yes" : "NO", Cell(q.length, 12).c_str(), Cell(q.min_clearance, 10).c_str(),
               Cell(q.avg_clearance, 10).c_str(), Cell(q.inverse_clearance, 14).c_str());
@@ -184,9 +183,9 @@ Subcommand AddMergeCommand(CLI::App& parent) {
   f.resolution_opt = app->add_option(
       "--resolution", f.resolution,
       "Local-planner resolution, fraction of the space's extent (default: the scene's, or 0.01)");
-  f.endpoint_tolerance_opt = app->add_option(
-      "--endpoint-tolerance", f.endpoint_tolerance,
-      "Largest distance between inputs' start (goal) waypoints (default 1e-6)");
+  f.endpoint_tolerance_opt =
+      app->add_option("--endpoint-tolerance", f.endpoint_tolerance,
+                      "Largest distance between inputs' start (goal) waypoints (default 1e-6)");
   app->add_option("--threads", f.threads, "Worker threads (0 = all cores)")->capture_default_str();
   app->add_flag("-q,--quiet", f.quiet, "No progress on stderr");
   return Subcommand{.app = app, .run = [flags] { return RunMerge(*flags); }};

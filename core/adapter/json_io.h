@@ -1,9 +1,9 @@
 // Proto3 JSON documents and whole-file reads and writes, with errors that name the file.
 #pragma once
 
-#include <string>
-
 #include <google/protobuf/message.h>
+
+#include <string>
 
 namespace hgraph {
 

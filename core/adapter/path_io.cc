@@ -23,7 +23,8 @@ std::string_view Trim(std::string_view s) {
 }
 
 bool EndsWith(const std::string& s, const std::string& suffix) {
-  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+  return s.size() >= suffix.size() &&
+         s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
 // Shortest decimal text that reads back as the same double.
@@ -129,8 +130,8 @@ std::vector<InputPath> ParsePathsText(const std::string& text, const std::string
                                   " numbers (the space's dimension), got " +
                                   std::to_string(values.size()));
     }
-    current.waypoints.push_back(Eigen::Map<const Eigen::VectorXd>(
-        values.data(), static_cast<Eigen::Index>(values.size())));
+    current.waypoints.push_back(
+        Eigen::Map<const Eigen::VectorXd>(values.data(), static_cast<Eigen::Index>(values.size())));
   }
   finish();
   return paths;

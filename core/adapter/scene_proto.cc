@@ -17,9 +17,7 @@ namespace {
 constexpr double kQuaternionTolerance = 1e-3;
 constexpr double kDefaultResolution = 0.01;
 
-std::string Index(const std::string& field, int i) {
-  return field + "[" + std::to_string(i) + "]";
-}
+std::string Index(const std::string& field, int i) { return field + "[" + std::to_string(i) + "]"; }
 
 std::string Num(double v) {
   std::ostringstream out;
@@ -42,9 +40,8 @@ std::string Problem(const Error& e) {
   std::string field = e.field();
   if (field.empty()) {
     field = root;
-  } else if (field.starts_with(root) &&
-             (field.size() == root.size() || field[root.size()] == '.' ||
-              field[root.size()] == '[')) {
+  } else if (field.starts_with(root) && (field.size() == root.size() || field[root.size()] == '.' ||
+                                         field[root.size()] == '[')) {
     // Already rooted.
   } else if (!own_root.empty() && field.starts_with(own_root)) {
     field = root + field.substr(own_root.size());
@@ -70,8 +67,9 @@ ComponentType ComponentTypeFromProto(v1::Component::Type type, const std::string
     case v1::Component::TYPE_SE2: return ComponentType::kSE2;
     case v1::Component::TYPE_SE3: return ComponentType::kSE3;
     default:
-      throw InputError(field, "must be one of TYPE_RN, TYPE_SO2, TYPE_SO3, TYPE_SE2, TYPE_SE3 (got " +
-                                  std::to_string(static_cast<int>(type)) + ")");
+      throw InputError(field,
+                       "must be one of TYPE_RN, TYPE_SO2, TYPE_SO3, TYPE_SE2, TYPE_SE3 (got " +
+                           std::to_string(static_cast<int>(type)) + ")");
   }
 }
 
@@ -113,8 +111,8 @@ class ShapeConverter {
       case v1::Shape::kBox: {
         const std::string f = field + ".box.size";
         if (proto.box().size_size() != 3) {
-          throw InputError(f, "expected 3 values (x y z), got " +
-                                  std::to_string(proto.box().size_size()));
+          throw InputError(
+              f, "expected 3 values (x y z), got " + std::to_string(proto.box().size_size()));
         }
         for (int k = 0; k < 3; ++k) RequirePositive(proto.box().size(k), Index(f, k));
         shape.type = ShapeType::kBox;
@@ -170,13 +168,15 @@ class ShapeConverter {
   void LoadMesh(const v1::MeshRef& mesh, const Eigen::Vector3d& scale, const std::string& field,
                 Shape* shape) {
     const MeshLoadOptions options{.scale = scale};
-    const std::string scale_key = "|" + Num(scale.x()) + "," + Num(scale.y()) + "," + Num(scale.z());
+    const std::string scale_key =
+        "|" + Num(scale.x()) + "," + Num(scale.y()) + "," + Num(scale.z());
     switch (mesh.source_case()) {
       case v1::MeshRef::kPath: {
         const std::string f = field + ".path";
         if (mesh.path().empty()) throw InputError(f, "empty mesh path");
         std::filesystem::path file(mesh.path());
-        if (file.is_relative() && !base_dir_.empty()) file = std::filesystem::path(base_dir_) / file;
+        if (file.is_relative() && !base_dir_.empty())
+          file = std::filesystem::path(base_dir_) / file;
         const std::string resolved = file.lexically_normal().string();
         shape->source = resolved;
         auto& cached = cache_["file:" + resolved + scale_key];
@@ -187,16 +187,17 @@ class ShapeConverter {
       case v1::MeshRef::kData: {
         const std::string format = RequireFormat(mesh, field, "inline data");
         if (mesh.data().empty()) throw InputError(field + ".data", "empty mesh data");
-        shape->source = "inline " + format + " data (" + std::to_string(mesh.data().size()) +
-                        " bytes)";
+        shape->source =
+            "inline " + format + " data (" + std::to_string(mesh.data().size()) + " bytes)";
         shape->mesh = LoadMeshBytes(mesh.data(), format, options, field + ".data");
         return;
       }
       case v1::MeshRef::kDigest: {
         const std::string f = field + ".digest";
         if (!resolver_) {
-          throw InputError(f, "mesh digests refer to blobs uploaded to the service; give a path "
-                              "or inline data instead");
+          throw InputError(f,
+                           "mesh digests refer to blobs uploaded to the service; give a path "
+                           "or inline data instead");
         }
         if (mesh.digest().sha256().empty()) throw InputError(f + ".sha256", "empty digest");
         const std::string format = RequireFormat(mesh, field, "a digest");
@@ -222,7 +223,8 @@ class ShapeConverter {
                                    const std::string& what) {
     const std::string format = NormalizeFormat(mesh.format());
     if (format.empty()) {
-      throw InputError(field + ".format", "required for " + what + " (a file extension such as \"obj\")");
+      throw InputError(field + ".format",
+                       "required for " + what + " (a file extension such as \"obj\")");
     }
     return format;
   }
@@ -348,7 +350,8 @@ std::shared_ptr<const Scene> SceneFromProto(const v1::Scene& proto, const std::s
     }
     if (!scene.space.CanDriveBody(b.component())) {
       throw InputError(f + ".component",
-                       std::string("a ") + ComponentTypeName(scene.space.component(b.component()).type) +
+                       std::string("a ") +
+                           ComponentTypeName(scene.space.component(b.component()).type) +
                            " component cannot drive a rigid body (use R^2, R^3, SO(2), SO(3), "
                            "SE(2) or SE(3))");
     }

@@ -1,11 +1,11 @@
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
 #include <functional>
 #include <limits>
 #include <string>
-#include <unistd.h>
 
 #include "core/adapter/json_io.h"
 #include "core/adapter/merge_proto.h"
@@ -366,7 +366,8 @@ TEST(AdapterTest, ToJsonUsesSnakeCaseAndPrintsDefaults) {
 TEST(AdapterTest, OmplTextFormatWithCommentsAndBlankLines) {
   const Space space = Space::RealVector(Eigen::Vector2d(0, 0), Eigen::Vector2d(10, 10));
   const std::vector<InputPath> paths = ParsePathsText(
-      "# header\n\n# first\n1 2\n  3\t4.5   # trailing comment\n\n\n+5 6e-1\n# not a separator\n7 8\n\n",
+      "# header\n\n# first\n1 2\n  3\t4.5   # trailing comment\n\n\n+5 6e-1\n# not a separator\n7 "
+      "8\n\n",
       "p.txt", space);
   ASSERT_EQ(paths.size(), 2u);
   EXPECT_EQ(paths[0].name, "first");
@@ -469,7 +470,8 @@ TEST(AdapterTest, MergeOptionsDefaultsAndErrors) {
   EXPECT_EQ(options.candidates.gap_init, 0);
   EXPECT_EQ(options.threads, 3);
 
-  for (const auto& [set, field] : std::vector<std::pair<std::function<void(v1::MergeOptions*)>, std::string>>{
+  for (const auto& [set, field] :
+       std::vector<std::pair<std::function<void(v1::MergeOptions*)>, std::string>>{
            {[](v1::MergeOptions* o) { o->set_radius(-1); }, "options.radius"},
            {[](v1::MergeOptions* o) { o->set_phi(0); }, "options.phi"},
            {[](v1::MergeOptions* o) { o->set_gap_extend(-1); }, "options.gap_extend"},
@@ -496,10 +498,17 @@ TEST(AdapterTest, MergeResultToProtoAndJson) {
   MergeResult result;
   result.path.name = "merged";
   result.path.waypoints = {Eigen::Vector2d(0, 0), Eigen::Vector2d(1, 1)};
-  result.quality = PathQuality{.length = 1.5, .min_clearance = 0.25, .avg_clearance = 0.5,
-                               .inverse_clearance = 7, .k = 3, .has_clearance = true};
-  result.inputs.push_back(InputReport{.name = "a", .valid = false, .invalid_edge = 2,
-                                      .invalid_reason = "collision", .waypoints = 4});
+  result.quality = PathQuality{.length = 1.5,
+                               .min_clearance = 0.25,
+                               .avg_clearance = 0.5,
+                               .inverse_clearance = 7,
+                               .k = 3,
+                               .has_clearance = true};
+  result.inputs.push_back(InputReport{.name = "a",
+                                      .valid = false,
+                                      .invalid_edge = 2,
+                                      .invalid_reason = "collision",
+                                      .waypoints = 4});
   result.stats.nodes = 12;
   result.stats.collision_checks = 1234567890123;
   result.timing.total_ms = 8.5;
@@ -518,9 +527,9 @@ TEST(AdapterTest, MergeResultToProtoAndJson) {
   EXPECT_EQ(proto.source_index(1), 3);
 
   const std::string json = ToJson(proto);
-  for (const char* key : {"\"min_clearance\": 0.25", "\"avg_clearance\": 0.5",
-                          "\"inverse_clearance\": 7", "\"invalid_reason\": \"collision\"",
-                          "\"total_ms\": 8.5", "\"edges_reused\""}) {
+  for (const char* key :
+       {"\"min_clearance\": 0.25", "\"avg_clearance\": 0.5", "\"inverse_clearance\": 7",
+        "\"invalid_reason\": \"collision\"", "\"total_ms\": 8.5", "\"edges_reused\""}) {
     EXPECT_NE(json.find(key), std::string::npos) << key << "\n" << json;
   }
 }
