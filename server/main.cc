@@ -1,0 +1,173 @@
+// hgraph-server: the PathMerger gRPC service, health checking, reflection and Prometheus
+// metrics. SIGTERM (or SIGINT) shuts down gracefully: health goes NOT_SERVING, new calls are
+// refused, in-flight calls get --grace-s to finish and are then cancelled, and the process
+// exits 0.
+#include <grpcpp/ext/proto_server_reflection_plugin.h>
+#include <grpcpp/grpcpp.h>
+#include <grpcpp/health_check_service_interface.h>
+#include <signal.h>
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+#include <tbb/info.h>
+
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <cstdio>
+#include <memory>
+#include <string>
+
+#include "core/common/error.h"
+#include "server/metrics.h"
+#include "server/service.h"
+
+namespace {
+
+struct Flags {
+  std::string listen = "0.0.0.0:50051";
+  std::string metrics_listen = "0.0.0.0:9464";
+  int threads = 0;
+  int max_pending = 64;
+  int64_t max_message_bytes = int64_t{64} << 20;
+  int max_paths = 256;
+  int max_waypoints = 100000;
+  int max_sessions = 1000;
+  int64_t cache_bytes = int64_t{2} << 30;
+  int64_t max_blob_bytes = int64_t{256} << 20;
+  double session_ttl_s = 3600;
+  double grace_s = 10;
+  int progress_interval_ms = 100;
+  std::string log_level = "info";
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Flags flags;
+  CLI::App app("hgraph-server: the H-Graph path merging service (gRPC, hgraph.v1.PathMerger)",
+               "hgraph-server");
+  app.add_option("--listen", flags.listen, "gRPC address host:port (port 0 picks a free one)")
+      ->capture_default_str();
+  app.add_option("--metrics-listen", flags.metrics_listen,
+                 "Prometheus /metrics address host:port (port 0 picks a free one; empty = off)")
+      ->capture_default_str();
+  app.add_option("--threads", flags.threads, "worker threads for all calls (0 = all cores)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  app.add_option("--max-pending", flags.max_pending,
+                 "calls queued or running on the workers before RESOURCE_EXHAUSTED")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--max-message-bytes", flags.max_message_bytes,
+                 "largest gRPC message received or sent")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--max-paths", flags.max_paths, "input paths per MergePaths batch")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--max-waypoints", flags.max_waypoints, "waypoints (nodes) per input path")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--max-sessions", flags.max_sessions, "live sessions")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--cache-bytes", flags.cache_bytes,
+                 "memory budget of blobs, scenes, collision worlds and H-Graphs (LRU eviction)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--max-blob-bytes", flags.max_blob_bytes, "largest uploaded blob")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--session-ttl-s", flags.session_ttl_s, "idle time before a session expires")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--grace-s", flags.grace_s,
+                 "on SIGTERM, time in-flight calls get to finish before they are cancelled")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  app.add_option("--progress-interval-ms", flags.progress_interval_ms,
+                 "default minimum time between two progress events of a merge")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--log-level", flags.log_level, "trace, debug, info, warn, error")
+      ->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+
+  // Logs go to stderr; stdout carries only the "ready" line.
+  spdlog::set_default_logger(spdlog::stderr_color_mt("hgraph-server"));
+  spdlog::set_level(spdlog::level::from_str(flags.log_level));
+  spdlog::set_pattern("%Y-%m-%dT%H:%M:%S.%e %^%l%$ %v");
+
+  // Every thread started from here on inherits the blocked mask, so the signals reach only the
+  // sigtimedwait below (no async-signal-safety concerns in a handler).
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGTERM);
+  sigaddset(&signals, SIGINT);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+
+  hgraph::server::ServerOptions options{
+      .threads = flags.threads > 0 ? flags.threads : tbb::info::default_concurrency(),
+      .max_admitted = flags.max_pending,
+      .max_paths = flags.max_paths,
+      .max_waypoints = flags.max_waypoints,
+      .max_sessions = flags.max_sessions,
+      .cache_bytes = static_cast<size_t>(flags.cache_bytes),
+      .max_blob_bytes = flags.max_blob_bytes,
+      .session_ttl = std::chrono::milliseconds(static_cast<int64_t>(flags.session_ttl_s * 1e3)),
+      .progress_interval_ms = flags.progress_interval_ms};
+
+  try {
+    hgraph::server::Metrics metrics;
+    hgraph::server::PathMergerService service(options, metrics);
+
+    grpc::EnableDefaultHealthCheckService(true);
+    grpc::reflection::InitProtoReflectionServerBuilderPlugin();
+    grpc::ServerBuilder builder;
+    int port = 0;
+    builder.AddListeningPort(flags.listen, grpc::InsecureServerCredentials(), &port);
+    builder.SetMaxReceiveMessageSize(static_cast<int>(flags.max_message_bytes));
+    builder.SetMaxSendMessageSize(static_cast<int>(flags.max_message_bytes));
+    builder.RegisterService(&service);
+    std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
+    if (!server || port == 0) {
+      spdlog::error("cannot listen on {} (--listen)", flags.listen);
+      return 2;
+    }
+    grpc::HealthCheckServiceInterface* health = server->GetHealthCheckService();
+    health->SetServingStatus("hgraph.v1.PathMerger", true);
+
+    std::unique_ptr<hgraph::server::MetricsHttpServer> metrics_http;
+    if (!flags.metrics_listen.empty()) {
+      metrics_http =
+          std::make_unique<hgraph::server::MetricsHttpServer>(metrics, flags.metrics_listen);
+    }
+    const int metrics_port = metrics_http ? metrics_http->port() : 0;
+    spdlog::info("serving on port {} with {} worker threads; metrics on port {}", port,
+                 options.threads, metrics_port);
+    // One machine-readable line on stdout for scripts and tests that start the server.
+    std::printf("hgraph-server ready grpc_port=%d metrics_port=%d\n", port, metrics_port);
+    std::fflush(stdout);
+
+    // The main thread waits for a signal and expires idle sessions once a second.
+    const timespec tick{.tv_sec = 1, .tv_nsec = 0};
+    int signal = -1;
+    while (signal < 0) {
+      signal = sigtimedwait(&signals, nullptr, &tick);
+      if (signal < 0) service.ExpireIdleSessions();
+    }
+    spdlog::info("received signal {}: shutting down (grace {} s)", signal, flags.grace_s);
+    health->SetServingStatus(false);
+    const auto grace = std::chrono::system_clock::now() +
+                       std::chrono::milliseconds(static_cast<int64_t>(flags.grace_s * 1e3));
+    // Refuses new calls at once; cancels calls still running at the deadline, which stops their
+    // merges through the cancel token.
+    server->Shutdown(grace);
+    server->Wait();
+    service.WaitIdle();
+    spdlog::info("shut down cleanly");
+  } catch (const hgraph::Error& e) {
+    spdlog::error("{}", e.what());
+    return 2;
+  }
+  return 0;
+}

@@ -1,0 +1,199 @@
+#include "server/scene_store.h"
+
+#include <google/protobuf/io/coded_stream.h>
+#include <google/protobuf/io/zero_copy_stream_impl_lite.h>
+
+#include <utility>
+
+#include "core/adapter/scene_proto.h"
+#include "core/common/error.h"
+#include "server/digest.h"
+
+namespace hgraph::server {
+namespace {
+
+// Deterministic encoding: the same Scene message always yields the same bytes, hence digest.
+std::string CanonicalBytes(const v1::Scene& scene) {
+  std::string bytes;
+  {
+    google::protobuf::io::StringOutputStream stream(&bytes);
+    google::protobuf::io::CodedOutputStream coded(&stream);
+    coded.SetSerializationDeterministic(true);
+    scene.SerializeToCodedStream(&coded);
+  }
+  return bytes;
+}
+
+// Meshes must be inline or uploaded: the server never opens a file named by a client.
+void CheckMesh(const v1::Shape& shape, const std::string& field, const SceneStore& store) {
+  if (!shape.has_mesh()) return;
+  const v1::MeshRef& mesh = shape.mesh();
+  const std::string mesh_field = field + ".mesh";
+  switch (mesh.source_case()) {
+    case v1::MeshRef::kPath:
+      throw InputError(mesh_field + ".path",
+                       "file paths are not accepted by the service; upload the file with "
+                       "UploadBlob and refer to it by digest");
+    case v1::MeshRef::kDigest:
+      ValidateDigest(mesh.digest(), mesh_field + ".digest");
+      if (!store.HasBlob(mesh.digest())) {
+        throw Error(ErrorCode::kNotFound, mesh_field + ".digest",
+                    "blob " + DigestText(mesh.digest()) +
+                        " is not held by this server; upload it with UploadBlob first");
+      }
+      return;
+    case v1::MeshRef::kData:
+      return;
+    case v1::MeshRef::SOURCE_NOT_SET:
+      throw InputError(mesh_field, "one of data or digest must be set");
+  }
+}
+
+}  // namespace
+
+std::string DigestText(const v1::Digest& digest) {
+  return "sha256:" + digest.sha256() + "/" + std::to_string(digest.size_bytes());
+}
+
+void ValidateDigest(const v1::Digest& digest, const std::string& field) {
+  if (!IsSha256Hex(digest.sha256())) {
+    throw InputError(field + ".sha256", "must be 64 lower-case hex digits, got \"" +
+                                            digest.sha256().substr(0, 80) + "\"");
+  }
+  if (digest.size_bytes() < 0) {
+    throw InputError(field + ".size_bytes",
+                     "must be >= 0, got " + std::to_string(digest.size_bytes()));
+  }
+}
+
+SceneStore::SceneStore(ResourceCache& cache, Metrics& metrics) : cache_(cache), metrics_(metrics) {}
+
+bool SceneStore::HasBlob(const v1::Digest& digest) const {
+  auto blob = cache_.Get<const std::string>(CacheKind::kBlob, digest.sha256());
+  return blob != nullptr && static_cast<int64_t>(blob->size()) == digest.size_bytes();
+}
+
+bool SceneStore::PutBlob(const v1::Digest& declared, std::string bytes) {
+  ValidateDigest(declared, "digest");
+  if (static_cast<int64_t>(bytes.size()) != declared.size_bytes()) {
+    throw InputError("digest.size_bytes", "declared " + std::to_string(declared.size_bytes()) +
+                                              " bytes, received " + std::to_string(bytes.size()));
+  }
+  const std::string actual = Sha256Hex(bytes);
+  if (actual != declared.sha256()) {
+    throw InputError("digest.sha256",
+                     "declared " + declared.sha256() + ", the bytes received hash to " + actual);
+  }
+  if (HasBlob(declared)) return false;
+  const size_t size = bytes.size();
+  if (!cache_.Put(CacheKind::kBlob, declared.sha256(),
+                  std::make_shared<const std::string>(std::move(bytes)), size)) {
+    throw Error(ErrorCode::kResourceExhausted, "digest.size_bytes",
+                std::to_string(size) + " bytes exceed the server's cache budget (--cache-bytes=" +
+                    std::to_string(cache_.budget_bytes()) + ")");
+  }
+  return true;
+}
+
+v1::Digest SceneStore::PutScene(const v1::Scene& scene) {
+  for (int i = 0; i < scene.obstacles_size(); ++i) {
+    CheckMesh(scene.obstacles(i).shape(), "scene.obstacles[" + std::to_string(i) + "].shape",
+              *this);
+  }
+  for (int i = 0; i < scene.robot_size(); ++i) {
+    CheckMesh(scene.robot(i).shape(), "scene.robot[" + std::to_string(i) + "].shape", *this);
+  }
+  const std::string bytes = CanonicalBytes(scene);
+  v1::Digest digest;
+  digest.set_sha256(Sha256Hex(bytes));
+  digest.set_size_bytes(static_cast<int64_t>(bytes.size()));
+  if (!cache_.Contains(CacheKind::kScene, digest.sha256())) {
+    if (!cache_.Put(CacheKind::kScene, digest.sha256(), std::make_shared<const v1::Scene>(scene),
+                    bytes.size())) {
+      throw Error(ErrorCode::kResourceExhausted, "scene",
+                  "the scene's " + std::to_string(bytes.size()) +
+                      " bytes exceed the server's cache budget");
+    }
+  }
+  try {
+    Get(digest, "scene");
+  } catch (...) {
+    // A scene that does not load must not be found by a later CreateSession.
+    cache_.Erase(CacheKind::kScene, digest.sha256());
+    throw;
+  }
+  return digest;
+}
+
+bool SceneStore::HasScene(const v1::Digest& digest) const {
+  return cache_.Contains(CacheKind::kScene, digest.sha256());
+}
+
+LoadedScene SceneStore::Get(const v1::Digest& digest, const std::string& field) {
+  ValidateDigest(digest, field);
+  const std::string& sha = digest.sha256();
+  std::shared_future<LoadedScene> pending;
+  std::promise<LoadedScene> promise;
+  {
+    std::lock_guard lock(loading_mutex_);
+    if (auto world = cache_.Get<const CollisionWorld>(CacheKind::kWorld, sha)) {
+      auto proto = cache_.Get<const v1::Scene>(CacheKind::kScene, sha);
+      if (proto) {
+        metrics_.Increment("hgraph_scene_cache_hits_total", {});
+        return LoadedScene{proto, world};
+      }
+    }
+    if (auto it = loading_.find(sha); it != loading_.end()) {
+      pending = it->second;
+    } else {
+      loading_[sha] = promise.get_future().share();
+    }
+  }
+  if (pending.valid()) {
+    // Another call is loading the same scene: this one shares its result.
+    metrics_.Increment("hgraph_scene_cache_hits_total", {});
+    return pending.get();
+  }
+  metrics_.Increment("hgraph_scene_cache_misses_total", {});
+  try {
+    LoadedScene loaded = Load(sha, field);
+    promise.set_value(loaded);
+    std::lock_guard lock(loading_mutex_);
+    loading_.erase(sha);
+    return loaded;
+  } catch (...) {
+    promise.set_exception(std::current_exception());
+    std::lock_guard lock(loading_mutex_);
+    loading_.erase(sha);
+    throw;
+  }
+}
+
+LoadedScene SceneStore::Load(const std::string& sha, const std::string& field) {
+  auto proto = cache_.Get<const v1::Scene>(CacheKind::kScene, sha);
+  if (!proto) {
+    throw Error(ErrorCode::kNotFound, field,
+                "scene sha256:" + sha +
+                    " is not held by this server (never stored, or evicted under the memory "
+                    "budget); store it again with PutScene");
+  }
+  BlobResolver resolver = [this](const v1::Digest& digest) -> std::optional<std::string> {
+    auto blob = cache_.Get<const std::string>(CacheKind::kBlob, digest.sha256());
+    if (!blob) return std::nullopt;
+    return *blob;
+  };
+  std::shared_ptr<const Scene> scene;
+  try {
+    scene = SceneFromProto(*proto, "", resolver);
+  } catch (const Error& e) {
+    // A blob evicted since PutScene: the client uploads it again.
+    if (e.code() == ErrorCode::kNotFound) throw Error(ErrorCode::kNotFound, field, e.what());
+    throw;
+  }
+  auto world = std::make_shared<const CollisionWorld>(scene);
+  metrics_.Increment("hgraph_scene_loads_total", {});
+  cache_.Put(CacheKind::kWorld, sha, world, world->memory_bytes());
+  return LoadedScene{proto, world};
+}
+
+}  // namespace hgraph::server

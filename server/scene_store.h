@@ -1,0 +1,63 @@
+// Content-addressed blobs and scenes, and the collision worlds loaded from them. Everything is
+// kept in the shared ResourceCache, so a scene evicted under the memory budget is loaded again
+// from its stored message if that is still held, and otherwise reported as NOT_FOUND.
+#pragma once
+
+#include <future>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+
+#include "core/collision/collision_world.h"
+#include "hgraph/v1/scene.pb.h"
+#include "server/metrics.h"
+#include "server/resource_cache.h"
+
+namespace hgraph::server {
+
+// A stored scene ready to check motions in. Copyable (shared, immutable parts).
+struct LoadedScene {
+  std::shared_ptr<const v1::Scene> proto;
+  std::shared_ptr<const CollisionWorld> world;
+};
+
+// Thread safe. Not copyable.
+class SceneStore {
+ public:
+  SceneStore(ResourceCache& cache, Metrics& metrics);
+  SceneStore(const SceneStore&) = delete;
+  SceneStore& operator=(const SceneStore&) = delete;
+
+  bool HasBlob(const v1::Digest& digest) const;
+  // Verifies the bytes against `declared` (size, then SHA-256) and stores them. Returns false if
+  // the blob was already held. Throws InputError naming "digest.size_bytes" or
+  // "digest.sha256" on a mismatch, Error(kResourceExhausted) if it exceeds the cache budget.
+  bool PutBlob(const v1::Digest& declared, std::string bytes);
+
+  // Checks that every mesh is inline or an uploaded blob, stores the scene under the digest of
+  // its canonical serialization, and loads it (so that errors in it are reported now, naming
+  // the field). Returns the digest.
+  v1::Digest PutScene(const v1::Scene& scene);
+
+  // The scene and its collision world, built on first use and shared by every session that
+  // names the same digest; concurrent first uses wait for one load. Throws Error(kNotFound,
+  // field) if the scene (or a blob it needs) is not held.
+  LoadedScene Get(const v1::Digest& digest, const std::string& field);
+  bool HasScene(const v1::Digest& digest) const;
+
+ private:
+  LoadedScene Load(const std::string& sha, const std::string& field);
+
+  ResourceCache& cache_;
+  Metrics& metrics_;
+  std::mutex loading_mutex_;
+  std::map<std::string, std::shared_future<LoadedScene>> loading_;
+};
+
+// "sha256:<hex>/<size>" for messages and logs.
+std::string DigestText(const v1::Digest& digest);
+// Throws InputError(field + ".sha256" / ".size_bytes") unless the digest is well formed.
+void ValidateDigest(const v1::Digest& digest, const std::string& field);
+
+}  // namespace hgraph::server

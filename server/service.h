@@ -1,0 +1,98 @@
+// The hgraph.v1.PathMerger service on the gRPC callback API. gRPC threads only parse, look up
+// and start writes; every CPU-bound step runs as a job on the WorkerPool, whose admission queue
+// answers RESOURCE_EXHAUSTED when full. Deadlines and client cancellation reach the engine
+// through a CancelToken per call.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "hgraph/v1/service.grpc.pb.h"
+#include "server/metrics.h"
+#include "server/resource_cache.h"
+#include "server/scene_store.h"
+#include "server/session_registry.h"
+#include "server/worker_pool.h"
+
+namespace hgraph::server {
+
+// Limits and sizes, all set from flags (server/main.cc documents each).
+struct ServerOptions {
+  int threads = 1;
+  int max_admitted = 64;
+  int max_paths = 256;
+  int max_waypoints = 100000;
+  int max_sessions = 1000;
+  size_t cache_bytes = size_t{2} << 30;
+  int64_t max_blob_bytes = int64_t{256} << 20;
+  std::chrono::milliseconds session_ttl{std::chrono::hours(1)};
+  int progress_interval_ms = 100;
+};
+
+// Thread safe. Not copyable or movable (reactors point into it).
+class PathMergerService final : public v1::PathMerger::CallbackService {
+ public:
+  PathMergerService(const ServerOptions& options, Metrics& metrics);
+  ~PathMergerService() override;
+
+  grpc::ServerUnaryReactor* FindMissingBlobs(grpc::CallbackServerContext* context,
+                                             const v1::FindMissingBlobsRequest* request,
+                                             v1::FindMissingBlobsResponse* response) override;
+  grpc::ServerReadReactor<v1::UploadBlobRequest>* UploadBlob(
+      grpc::CallbackServerContext* context, v1::UploadBlobResponse* response) override;
+  grpc::ServerUnaryReactor* PutScene(grpc::CallbackServerContext* context,
+                                     const v1::PutSceneRequest* request,
+                                     v1::PutSceneResponse* response) override;
+  grpc::ServerUnaryReactor* CreateSession(grpc::CallbackServerContext* context,
+                                          const v1::CreateSessionRequest* request,
+                                          v1::Session* response) override;
+  grpc::ServerUnaryReactor* GetSession(grpc::CallbackServerContext* context,
+                                       const v1::GetSessionRequest* request,
+                                       v1::Session* response) override;
+  grpc::ServerUnaryReactor* ListSessions(grpc::CallbackServerContext* context,
+                                         const v1::ListSessionsRequest* request,
+                                         v1::ListSessionsResponse* response) override;
+  grpc::ServerUnaryReactor* DeleteSession(grpc::CallbackServerContext* context,
+                                          const v1::DeleteSessionRequest* request,
+                                          v1::DeleteSessionResponse* response) override;
+  grpc::ServerWriteReactor<v1::MergePathsResponse>* MergePaths(
+      grpc::CallbackServerContext* context, const v1::MergePathsRequest* request) override;
+  grpc::ServerUnaryReactor* Requery(grpc::CallbackServerContext* context,
+                                    const v1::RequeryRequest* request,
+                                    v1::RequeryResponse* response) override;
+  grpc::ServerWriteReactor<v1::PlanPathsResponse>* PlanPaths(
+      grpc::CallbackServerContext* context, const v1::PlanPathsRequest* request) override;
+
+  // Drops sessions idle past their time-to-live and their H-Graphs; called periodically.
+  void ExpireIdleSessions();
+  // Waits for every admitted job (after the gRPC server has shut down).
+  void WaitIdle() { pool_.WaitIdle(); }
+
+  // Call bookkeeping shared by the reactors: one log line and the gRPC metrics per call.
+  void RecordCall(const std::string& method, const std::string& session,
+                  std::chrono::steady_clock::time_point started, const grpc::Status& status);
+  WorkerPool& pool() { return pool_; }
+  const ServerOptions& options() const { return options_; }
+  Metrics& metrics() { return metrics_; }
+
+  struct StoredHGraph;
+
+ private:
+  class UnaryCall;
+  class UploadCall;
+  class MergeCall;
+
+  void DropHGraphs(const std::vector<std::string>& names);
+  void RecordMerge(const std::string& method, const v1::MergeResult& result);
+
+  ServerOptions options_;
+  Metrics& metrics_;
+  ResourceCache cache_;
+  SceneStore scenes_;
+  SessionRegistry sessions_;
+  WorkerPool pool_;
+};
+
+}  // namespace hgraph::server

@@ -1,0 +1,48 @@
+// The server's worker pool: every CPU-bound step of a call (hashing uploads, loading scenes,
+// building and searching H-Graphs) runs here, never on a gRPC thread. A oneTBB task_arena of
+// N threads runs the jobs; the engine's own parallel loops nest inside them, and a process-wide
+// tbb::global_control keeps the total at N threads however many jobs run at once.
+#pragma once
+
+#include <tbb/global_control.h>
+#include <tbb/task_arena.h>
+
+#include <atomic>
+#include <condition_variable>
+#include <functional>
+#include <mutex>
+
+namespace hgraph::server {
+
+// Thread safe. Not copyable or movable. One per process (it sets TBB's global parallelism).
+class WorkerPool {
+ public:
+  // threads >= 1; max_admitted >= 1 jobs may be queued or running at once.
+  WorkerPool(int threads, int max_admitted);
+  ~WorkerPool();
+  WorkerPool(const WorkerPool&) = delete;
+  WorkerPool& operator=(const WorkerPool&) = delete;
+
+  // Queues the job, or returns false without running it when the admission queue is full (the
+  // caller answers RESOURCE_EXHAUSTED). The job must not throw.
+  bool TrySubmit(std::function<void()> job);
+  // Blocks until every admitted job has finished.
+  void WaitIdle();
+
+  int threads() const { return threads_; }
+  int max_admitted() const { return max_admitted_; }
+  int admitted() const { return admitted_.load(); }
+
+ private:
+  const int threads_;
+  const int max_admitted_;
+  // Enqueued jobs are run by TBB worker threads only (no thread joins the arena), so the
+  // global limit is threads + 1: TBB counts one slot for an external thread.
+  tbb::global_control parallelism_;
+  tbb::task_arena arena_;
+  std::atomic<int> admitted_{0};
+  std::mutex mutex_;
+  std::condition_variable idle_;
+};
+
+}  // namespace hgraph::server
