@@ -169,6 +169,10 @@ v1::MergeResult MergeResultToProto(const MergeResult& result) {
   stats->set_distance_queries(s.distance_queries);
   stats->set_edges_reused(s.edges_reused);
   stats->set_threads(s.threads);
+  stats->set_alignments(s.alignments);
+  stats->set_radius(s.radius);
+  stats->set_gap_init(s.gap_init);
+  stats->set_gap_extend(s.gap_extend);
   const MergeTiming& t = result.timing;
   v1::Timing* timing = proto.mutable_timing();
   timing->set_validate_ms(t.validate_ms);

@@ -230,6 +230,11 @@ MergeResult HybridizationSession::Query(const MeasureSpec& measure,
   result.quality = EvaluateEdges(graph_, best.edges, measure.k);
   for (int n : best.nodes) {
     const HNode& node = graph_.node(n);
+    // An input that repeats a waypoint gives a zero-length edge; the output lists it once.
+    if (!result.path.waypoints.empty() &&
+        checker_->space().Distance(result.path.waypoints.back(), node.q) == 0) {
+      continue;
+    }
     result.path.waypoints.push_back(node.q);
     result.source_path.push_back(node.path);
     result.source_index.push_back(node.index);
@@ -289,6 +294,7 @@ MergeResult HybridizationSession::Query(const MeasureSpec& measure,
     result.stats.edges_checked = rechecked;
   }
   int64_t checked_edges = 0;
+  result.stats.edges_valid = 0;
   for (int e = 0; e < graph_.num_edges(); ++e) {
     const EdgeState state = graph_.edge(e).report.state;
     if (state != EdgeState::kUnchecked) ++checked_edges;

@@ -229,3 +229,24 @@ TEST_F(MergeTest, ThreadCountDoesNotChangeTheResult) {
 
 }  // namespace
 }  // namespace hgraph
+
+namespace hgraph {
+namespace {
+
+TEST_F(MergeTest, StatsAreConsistent) {
+  const LocalPlanner planner = MakePlanner();
+  for (Variant variant : {Variant::kAllPairs, Variant::kEditDistance}) {
+    const MergeResult r =
+        Merge(planner, MergeRequest{.paths = CirclePaths(),
+                                    .options = {.candidates = {.variant = variant}}});
+    EXPECT_GE(r.stats.edges_checked, r.stats.input_edges + r.stats.candidate_edges);
+    EXPECT_LE(r.stats.edges_valid, r.stats.input_edges + r.stats.candidate_edges);
+    // The repeated waypoint of the first OMPL path appears once in the output.
+    for (size_t j = 1; j < r.path.waypoints.size(); ++j) {
+      EXPECT_GT((r.path.waypoints[j] - r.path.waypoints[j - 1]).norm(), 0);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace hgraph
