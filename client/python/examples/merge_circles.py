@@ -1,0 +1,47 @@
+#!/usr/bin/env python3
+"""Merges the two input paths of OMPL's circles problem on a running hgraph server, then
+re-queries the same H-Graph for clearance without new collision checks.
+
+    PYTHONPATH=client/python:build/python /usr/bin/python3 \
+        client/python/examples/merge_circles.py --server localhost:50051
+"""
+import argparse
+import pathlib
+import sys
+
+import hgraph_client
+
+ROOT = pathlib.Path(__file__).resolve().parents[3]
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--server", default="localhost:50051")
+    parser.add_argument("--scene", default=str(ROOT / "tests/data/circles/scene.json"))
+    parser.add_argument("--paths", default=str(ROOT / "tests/data/circles/paths.txt"))
+    args = parser.parse_args()
+
+    with hgraph_client.connect(args.server) as client:
+        digest = client.upload_scene(args.scene)
+        session = client.create_session(digest)
+        print(f"session {session.name} on scene {digest.sha256[:12]}")
+        paths = hgraph_client.load_paths_text(pathlib.Path(args.paths).read_text())
+
+        def show(p: hgraph_client.Progress) -> None:
+            print(f"  {p.phase:10s} {p.done}/{p.total}  checks={p.collision_checks}")
+
+        merged = client.merge(paths, measure="length", variant="all-pairs", on_progress=show)
+        r = merged.result
+        print(f"merged: length {r.quality.length:.3f} (best input "
+              f"{r.inputs[r.best_input].quality.length:.3f}), "
+              f"{r.stats.collision_checks} collision checks, H-Graph {merged.hgraph}")
+        again = client.requery(merged.hgraph, measure="bottleneck-clearance")
+        print(f"requery bottleneck-clearance: min clearance {again.quality.min_clearance:.3f}, "
+              f"{again.stats.collision_checks} new collision checks, "
+              f"{again.stats.edges_reused} edges reused")
+        client.delete_session()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,298 @@
+"""A small typed wrapper over the generated hgraph.v1 stubs."""
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import pathlib
+from typing import Callable, Iterable, Iterator, Optional, Sequence, Union
+
+import grpc
+from google.protobuf import json_format
+
+from hgraph.v1 import merge_pb2, path_pb2, scene_pb2, service_pb2, service_pb2_grpc, space_pb2
+
+# Uploads are chunked well below gRPC's default 4 MiB message limit.
+CHUNK_BYTES = 1 << 20
+
+MEASURES = {
+    "length": merge_pb2.Measure.TYPE_LENGTH,
+    "inverse-clearance": merge_pb2.Measure.TYPE_INVERSE_CLEARANCE,
+    "bottleneck-clearance": merge_pb2.Measure.TYPE_BOTTLENECK_CLEARANCE,
+    "safe-length": merge_pb2.Measure.TYPE_SAFE_LENGTH,
+}
+
+VARIANTS = {
+    "all-pairs": merge_pb2.VARIANT_ALL_PAIRS,
+    "neighborhood": merge_pb2.VARIANT_NEIGHBORHOOD,
+    "k-nearest": merge_pb2.VARIANT_K_NEAREST,
+    "edit-distance": merge_pb2.VARIANT_EDIT_DISTANCE,
+    "edit-distance-neighborhood": merge_pb2.VARIANT_EDIT_DISTANCE_NEIGHBORHOOD,
+}
+
+
+class HgraphError(Exception):
+    """A failed call: the canonical gRPC code and the server's message (which names the field)."""
+
+    def __init__(self, code: grpc.StatusCode, message: str):
+        super().__init__(f"{code.name}: {message}")
+        self.code = code
+        self.message = message
+
+
+@dataclasses.dataclass
+class Progress:
+    phase: str
+    done: int
+    total: int
+    collision_checks: int
+    distance_queries: int
+    elapsed_ms: float
+
+
+@dataclasses.dataclass
+class MergeOutcome:
+    result: merge_pb2.MergeResult
+    # "sessions/<id>/hgraphs/<n>": pass to Client.requery. Empty if the server could not keep it.
+    hgraph: str
+    progress_events: int
+
+
+PathLike = Union[path_pb2.Path, Sequence[Sequence[float]]]
+
+
+def make_measure(measure: Union[str, merge_pb2.Measure], k: Optional[float] = None,
+                 safety: Optional[float] = None) -> merge_pb2.Measure:
+    """"length", "inverse-clearance", "bottleneck-clearance", "safe-length", or a Measure."""
+    if isinstance(measure, merge_pb2.Measure):
+        return measure
+    if measure not in MEASURES:
+        raise ValueError(f"measure: unknown {measure!r}; known: {', '.join(MEASURES)}")
+    proto = merge_pb2.Measure(type=MEASURES[measure])
+    if k is not None:
+        proto.k = k
+    if safety is not None:
+        proto.safety = safety
+    return proto
+
+
+def make_paths(paths: Union[path_pb2.PathSet, Iterable[PathLike]]) -> path_pb2.PathSet:
+    """A PathSet from Path messages or from lists of waypoints (each a list of numbers)."""
+    if isinstance(paths, path_pb2.PathSet):
+        return paths
+    out = path_pb2.PathSet()
+    for i, path in enumerate(paths):
+        if isinstance(path, path_pb2.Path):
+            out.paths.append(path)
+            continue
+        p = out.paths.add(name=f"path{i}")
+        for q in path:
+            p.waypoints.add(values=[float(v) for v in q])
+    return out
+
+
+def load_paths_text(text: str) -> path_pb2.PathSet:
+    """OMPL's matrix format: one configuration per line, blank lines between paths, '#' comments."""
+    paths, current = [], []
+    for line in text.splitlines():
+        line = line.split("#", 1)[0].strip()
+        if not line:
+            if current:
+                paths.append(current)
+                current = []
+            continue
+        current.append([float(v) for v in line.split()])
+    if current:
+        paths.append(current)
+    return make_paths(paths)
+
+
+def _digest(data: bytes) -> scene_pb2.Digest:
+    return scene_pb2.Digest(sha256=hashlib.sha256(data).hexdigest(), size_bytes=len(data))
+
+
+def _raise(error: grpc.RpcError) -> None:
+    raise HgraphError(error.code(), error.details()) from None
+
+
+class Client:
+    """One channel to an hgraph server. Not thread safe (holds the current session)."""
+
+    def __init__(self, target: str, *, max_message_bytes: int = 64 << 20):
+        self.target = target
+        self.channel = grpc.insecure_channel(target, options=[
+            ("grpc.max_receive_message_length", max_message_bytes),
+            ("grpc.max_send_message_length", max_message_bytes),
+        ])
+        self.stub = service_pb2_grpc.PathMergerStub(self.channel)
+        self.session: Optional[str] = None
+
+    def close(self) -> None:
+        self.channel.close()
+
+    def __enter__(self) -> "Client":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    # Blobs and scenes -------------------------------------------------------------------------
+
+    def upload_blob(self, data: bytes, timeout: Optional[float] = None) -> scene_pb2.Digest:
+        digest = _digest(data)
+
+        def chunks() -> Iterator[service_pb2.UploadBlobRequest]:
+            yield service_pb2.UploadBlobRequest(digest=digest, data=data[:CHUNK_BYTES])
+            for at in range(CHUNK_BYTES, len(data), CHUNK_BYTES):
+                yield service_pb2.UploadBlobRequest(data=data[at:at + CHUNK_BYTES])
+
+        try:
+            self.stub.UploadBlob(chunks(), timeout=timeout)
+        except grpc.RpcError as e:
+            _raise(e)
+        return digest
+
+    def upload_scene(self, scene: Union[str, pathlib.Path, scene_pb2.Scene],
+                     base_dir: Union[str, pathlib.Path, None] = None,
+                     timeout: Optional[float] = None) -> scene_pb2.Digest:
+        """Stores a scene (a JSON file or a Scene message) and returns its digest.
+
+        Meshes given by file path (relative to the scene file's folder, or `base_dir`) are
+        replaced by their digests; only the blobs the server lacks are uploaded.
+        """
+        if isinstance(scene, scene_pb2.Scene):
+            proto = scene_pb2.Scene()
+            proto.CopyFrom(scene)
+            folder = pathlib.Path(base_dir or ".")
+        else:
+            path = pathlib.Path(scene)
+            proto = json_format.Parse(path.read_text(), scene_pb2.Scene())
+            folder = pathlib.Path(base_dir) if base_dir else path.parent
+        blobs = {}
+        shapes = [o.shape for o in proto.obstacles] + [b.shape for b in proto.robot]
+        for shape in shapes:
+            if shape.HasField("mesh") and shape.mesh.WhichOneof("source") == "path":
+                data = (folder / shape.mesh.path).read_bytes()
+                digest = _digest(data)
+                blobs[digest.sha256] = (digest, data)
+                if not shape.mesh.format:
+                    shape.mesh.format = pathlib.Path(shape.mesh.path).suffix.lstrip(".")
+                shape.mesh.digest.CopyFrom(digest)
+        try:
+            if blobs:
+                missing = self.stub.FindMissingBlobs(service_pb2.FindMissingBlobsRequest(
+                    digests=[d for d, _ in blobs.values()]), timeout=timeout).missing
+                for digest in missing:
+                    self.upload_blob(blobs[digest.sha256][1], timeout=timeout)
+            return self.stub.PutScene(service_pb2.PutSceneRequest(scene=proto),
+                                      timeout=timeout).digest
+        except grpc.RpcError as e:
+            _raise(e)
+
+    # Sessions ---------------------------------------------------------------------------------
+
+    def create_session(self, scene: scene_pb2.Digest,
+                       timeout: Optional[float] = None) -> service_pb2.Session:
+        """Creates a session on the scene and makes it the client's current session."""
+        try:
+            session = self.stub.CreateSession(service_pb2.CreateSessionRequest(scene=scene),
+                                              timeout=timeout)
+        except grpc.RpcError as e:
+            _raise(e)
+        self.session = session.name
+        return session
+
+    def get_session(self, name: Optional[str] = None) -> service_pb2.Session:
+        try:
+            return self.stub.GetSession(service_pb2.GetSessionRequest(name=name or self.session))
+        except grpc.RpcError as e:
+            _raise(e)
+
+    def list_sessions(self) -> list:
+        try:
+            return list(self.stub.ListSessions(service_pb2.ListSessionsRequest()).sessions)
+        except grpc.RpcError as e:
+            _raise(e)
+
+    def delete_session(self, name: Optional[str] = None) -> None:
+        try:
+            self.stub.DeleteSession(service_pb2.DeleteSessionRequest(name=name or self.session))
+        except grpc.RpcError as e:
+            _raise(e)
+
+    # Merging ----------------------------------------------------------------------------------
+
+    def merge(self, paths, *, measure: Union[str, merge_pb2.Measure] = "length",
+              k: Optional[float] = None, safety: Optional[float] = None,
+              variant: Optional[str] = None, options: Optional[merge_pb2.MergeOptions] = None,
+              session: Optional[str] = None,
+              on_progress: Optional[Callable[[Progress], None]] = None,
+              progress_interval_ms: int = 0, seed: int = 0,
+              timeout: Optional[float] = None) -> MergeOutcome:
+        """Merges the paths in the session (default: the current one), streaming progress."""
+        opts = merge_pb2.MergeOptions()
+        if options is not None:
+            opts.CopyFrom(options)
+        if variant is not None:
+            opts.variant = VARIANTS[variant]
+        request = service_pb2.MergePathsRequest(
+            session=session or self.session or "", paths=make_paths(paths),
+            measure=make_measure(measure, k, safety), options=opts, seed=seed,
+            progress_interval_ms=progress_interval_ms)
+        events = 0
+        try:
+            for event in self.stub.MergePaths(request, timeout=timeout):
+                if event.HasField("progress"):
+                    events += 1
+                    if on_progress is not None:
+                        p = event.progress
+                        on_progress(Progress(p.phase, p.done, p.total, p.collision_checks,
+                                             p.distance_queries, p.elapsed_ms))
+                elif event.HasField("result"):
+                    return MergeOutcome(event.result, event.hgraph, events)
+        except grpc.RpcError as e:
+            _raise(e)
+        raise HgraphError(grpc.StatusCode.INTERNAL, "the stream ended without a result")
+
+    def merge_stream(self, request: service_pb2.MergePathsRequest,
+                     timeout: Optional[float] = None):
+        """The raw response stream (a grpc call object: iterate it, or .cancel() it)."""
+        return self.stub.MergePaths(request, timeout=timeout)
+
+    def requery(self, hgraph: str, measure: Union[str, merge_pb2.Measure] = "length", *,
+                k: Optional[float] = None, safety: Optional[float] = None,
+                timeout: Optional[float] = None) -> merge_pb2.MergeResult:
+        """Searches a stored H-Graph under another measure, reusing its checked edges."""
+        try:
+            return self.stub.Requery(service_pb2.RequeryRequest(
+                hgraph=hgraph, measure=make_measure(measure, k, safety)), timeout=timeout).result
+        except grpc.RpcError as e:
+            _raise(e)
+
+    def plan(self, *, count: int = 1, planner: str = "", time_per_path_s: float = 0,
+             seed: int = 1, simplify: bool = False, session: Optional[str] = None,
+             start: Optional[Sequence[float]] = None, goal: Optional[Sequence[float]] = None,
+             timeout: Optional[float] = None) -> list:
+        """Plans input paths with the server's OMPL planners; returns the Path messages."""
+        request = service_pb2.PlanPathsRequest(
+            session=session or self.session or "", planner=planner, count=count,
+            time_per_path_s=time_per_path_s, seed=seed, simplify=simplify)
+        if start is not None:
+            request.start.values.extend(start)
+        if goal is not None:
+            request.goal.values.extend(goal)
+        try:
+            return [event.path for event in self.stub.PlanPaths(request, timeout=timeout)]
+        except grpc.RpcError as e:
+            _raise(e)
+
+
+def connect(target: str, *, wait_s: float = 10.0, **kwargs) -> Client:
+    """A client whose channel is ready (waits up to wait_s for the server)."""
+    client = Client(target, **kwargs)
+    try:
+        grpc.channel_ready_future(client.channel).result(timeout=wait_s)
+    except grpc.FutureTimeoutError:
+        client.close()
+        raise HgraphError(grpc.StatusCode.UNAVAILABLE,
+                          f"no hgraph server answered at {target} within {wait_s} s") from None
+    return client
