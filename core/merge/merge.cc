@@ -138,9 +138,11 @@ void HybridizationSession::CheckEdges(const std::vector<int>& edge_ids, bool nee
                           HEdge& edge = graph_.mutable_edge(edge_ids[k]);
                           const EdgeReport previous = std::move(edge.report);
                           edge.report = checker_->CheckEdge(
-                              EdgeCheckRequest{.from = &graph_.node(edge.u).q,
-                                               .to = &graph_.node(edge.v).q,
-                                               .need_clearance = need_clearance});
+                              EdgeCheckRequest{
+                                  .from = &graph_.node(edge.u).q,
+                                  .to = &graph_.node(edge.v).q,
+                                  .need_clearance = need_clearance,
+                                  .known_valid = previous.state == EdgeState::kValid});
                           // A re-check for clearance keeps counting what the first check cost.
                           if (previous.state != EdgeState::kUnchecked) {
                             edge.report.collision_checks += previous.collision_checks;

@@ -40,6 +40,10 @@ struct EdgeCheckRequest {
   const Config* from = nullptr;
   const Config* to = nullptr;
   bool need_clearance = false;
+  // The motion already passed the validity check at this checker's resolution (a stored edge
+  // re-checked for its clearance profile): skip straight to the clearance samples, which find
+  // any collision on their own.
+  bool known_valid = false;
 };
 
 // Checks straight motions. Implementations must be thread safe: the H-Graph calls CheckEdge

@@ -165,6 +165,8 @@ TEST_F(MergeTest, LengthFirstThenClearancePaysOnlyForMissingProfiles) {
   const MergeResult second = session.Query({.type = MeasureType::kInverseClearance, .k = 3});
   EXPECT_GT(second.stats.distance_queries, 0);
   EXPECT_GT(second.stats.edges_checked, 0);
+  // Edges known valid are not collision-checked again, only measured.
+  EXPECT_EQ(second.stats.collision_checks, 0);
   const MergeResult third = session.Query({.type = MeasureType::kInverseClearance, .k = 1});
   EXPECT_EQ(third.stats.distance_queries, 0);
   EXPECT_EQ(third.stats.collision_checks, 0);
