@@ -83,6 +83,7 @@ class PathMergerService final : public v1::PathMerger::CallbackService {
   class UnaryCall;
   class UploadCall;
   class MergeCall;
+  class PlanCall;
 
   void DropHGraphs(const std::vector<std::string>& names);
   void RecordMerge(const std::string& method, const v1::MergeResult& result);
