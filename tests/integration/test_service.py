@@ -1,0 +1,377 @@
+"""Integration tests of hgraph-server: a real server on a loopback port, driven from the Python
+client (and, in test_cli_remote, from the C++ CLI). Every test that starts a server stops it.
+
+Run through CTest (which sets the environment), or by hand:
+    HGRAPH_SERVER=build/hgraph-server HGRAPH_CLI=build/hgraph \
+    PYTHONPATH=client/python:build/python /usr/bin/python3 -m pytest tests/integration
+"""
+import os
+import pathlib
+import re
+import signal
+import subprocess
+import threading
+import time
+import urllib.request
+
+import grpc
+import pytest
+
+import hgraph_client
+from hgraph.v1 import merge_pb2, scene_pb2, service_pb2
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+DATA = ROOT / "tests" / "data" / "circles"
+SERVER = os.environ.get("HGRAPH_SERVER", str(ROOT / "build" / "hgraph-server"))
+CLI = os.environ.get("HGRAPH_CLI", str(ROOT / "build" / "hgraph"))
+
+
+class Server:
+    """One hgraph-server process on 127.0.0.1 with free ports picked by the server itself."""
+
+    def __init__(self, *flags):
+        threads = [] if "--threads" in flags else ["--threads", "2"]
+        self.proc = subprocess.Popen(
+            [SERVER, "--listen", "127.0.0.1:0", "--metrics-listen", "127.0.0.1:0", *threads,
+             *flags],
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        line = self.proc.stdout.readline()
+        match = re.search(r"grpc_port=(\d+) metrics_port=(\d+)", line)
+        if not match:
+            self.proc.kill()
+            raise RuntimeError(f"server did not start: {line!r} {self.proc.stderr.read()}")
+        self.port, self.metrics_port = int(match.group(1)), int(match.group(2))
+        self.target = f"127.0.0.1:{self.port}"
+        # Drain the log so that the pipe never fills; keep it for failure messages.
+        self.log = []
+        self._reader = threading.Thread(target=self._read_log, daemon=True)
+        self._reader.start()
+
+    def _read_log(self):
+        for line in self.proc.stderr:
+            self.log.append(line)
+
+    def client(self) -> hgraph_client.Client:
+        return hgraph_client.connect(self.target)
+
+    def metrics(self) -> str:
+        url = f"http://127.0.0.1:{self.metrics_port}/metrics"
+        return urllib.request.urlopen(url, timeout=5).read().decode()
+
+    def metric(self, name: str, **labels) -> float:
+        total = 0.0
+        for line in self.metrics().splitlines():
+            if line.startswith("#") or not line.startswith(name):
+                continue
+            series, value = line.rsplit(" ", 1)
+            if series.split("{")[0] != name:
+                continue
+            if all(f'{k}="{v}"' in series for k, v in labels.items()):
+                total += float(value)
+        return total
+
+    def stop(self, timeout=20) -> int:
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGTERM)
+            try:
+                self.proc.wait(timeout=timeout)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait()
+                raise AssertionError("server ignored SIGTERM")
+        return self.proc.returncode
+
+
+@pytest.fixture(scope="module")
+def server():
+    s = Server("--max-paths", "8")
+    yield s
+    assert s.stop() == 0, "".join(s.log)
+
+
+@pytest.fixture
+def client(server):
+    with server.client() as c:
+        c.create_session(c.upload_scene(DATA / "scene.json"))
+        yield c
+
+
+def input_paths():
+    return hgraph_client.load_paths_text((DATA / "paths.txt").read_text())
+
+
+def densified(n):
+    """The two inputs with every edge cut into n pieces: still valid, and an all-pairs merge of
+    them takes seconds (long enough to cancel)."""
+    out = []
+    for path in input_paths().paths:
+        w = [list(q.values) for q in path.waypoints]
+        dense = []
+        for a, b in zip(w, w[1:]):
+            for i in range(n):
+                dense.append([a[j] + (b[j] - a[j]) * i / n for j in range(len(a))])
+        dense.append(w[-1])
+        out.append(dense)
+    return out
+
+
+def test_health_and_reflection(server):
+    channel = grpc.insecure_channel(server.target)
+    check = channel.unary_unary("/grpc.health.v1.Health/Check")
+    # HealthCheckResponse{status: SERVING} is field 1 = 1.
+    assert check(b"", timeout=5) == b"\x08\x01"
+    # HealthCheckRequest{service: "hgraph.v1.PathMerger"}.
+    name = b"hgraph.v1.PathMerger"
+    assert check(b"\x0a" + bytes([len(name)]) + name, timeout=5) == b"\x08\x01"
+    # ServerReflectionRequest{list_services: ""} (field 7).
+    reflect = channel.stream_stream("/grpc.reflection.v1alpha.ServerReflection/ServerReflectionInfo")
+    responses = list(reflect(iter([b"\x3a\x00"]), timeout=5))
+    assert b"hgraph.v1.PathMerger" in responses[0]
+    assert b"grpc.health.v1.Health" in responses[0]
+    channel.close()
+
+
+def test_merge_streams_progress_then_requery_reuses_checks(client):
+    events = []
+    merged = client.merge(input_paths(), measure="inverse-clearance", variant="all-pairs",
+                          on_progress=events.append, progress_interval_ms=1)
+    assert merged.progress_events >= 1 and events
+    assert {e.phase for e in events} <= {"validate", "inputs", "align", "candidates", "check",
+                                         "clearance", "search", "evaluate"}
+    result = merged.result
+    assert merged.hgraph.startswith(client.session + "/hgraphs/")
+    assert result.quality.length <= min(i.quality.length for i in result.inputs if i.valid)
+    assert result.stats.collision_checks > 0
+
+    # Clearance profiles were computed for the first measure: other measures need no new work.
+    for measure in ("bottleneck-clearance", "length", "safe-length"):
+        again = client.requery(merged.hgraph, measure, safety=0.5)
+        assert again.stats.collision_checks == 0, measure
+        assert again.stats.distance_queries == 0, measure
+        assert again.stats.edges_checked == 0, measure
+        assert again.stats.edges_reused > 0, measure
+    assert client.get_session().hgraphs == [merged.hgraph]
+
+
+def test_requery_computes_missing_profiles_once(client):
+    merged = client.merge(input_paths(), measure="length", variant="all-pairs")
+    first = client.requery(merged.hgraph, "inverse-clearance")
+    assert first.stats.distance_queries > 0  # length needed no profiles; they are made now
+    second = client.requery(merged.hgraph, "bottleneck-clearance")
+    assert second.stats.collision_checks == 0 and second.stats.distance_queries == 0
+
+
+def test_upload_chunked_blob_and_mesh_scene(server):
+    with server.client() as c:
+        # 5 MiB is more than gRPC's default 4 MiB message: the client sends 1 MiB chunks.
+        blob = bytes((i * 7919) % 251 for i in range(5 << 20))
+        digest = c.upload_blob(blob)
+        missing = c.stub.FindMissingBlobs(service_pb2.FindMissingBlobsRequest(digests=[digest]))
+        assert list(missing.missing) == []
+        wrench = ROOT / "scenes" / "wrench" / "scene.json"
+        if wrench.exists():
+            scene_digest = c.upload_scene(wrench)
+            assert c.upload_scene(wrench) == scene_digest  # content-addressed
+
+
+def test_upload_with_wrong_digest_is_rejected(server):
+    with server.client() as c:
+        bad = scene_pb2.Digest(sha256="0" * 64, size_bytes=3)
+        with pytest.raises(grpc.RpcError) as e:
+            c.stub.UploadBlob(iter([service_pb2.UploadBlobRequest(digest=bad, data=b"abc")]))
+        assert e.value.code() == grpc.StatusCode.INVALID_ARGUMENT
+        assert "digest.sha256" in e.value.details()
+
+
+def test_put_scene_names_field_of_file_path_mesh(server):
+    channel = grpc.insecure_channel(server.target)
+    from hgraph.v1 import service_pb2_grpc
+    stub = service_pb2_grpc.PathMergerStub(channel)
+    scene = scene_pb2.Scene()
+    scene.space.components.add(type=1, dimension=2, lower=[0, 0], upper=[1, 1])
+    scene.robot.add(name="r").shape.mesh.path = "/etc/passwd"
+    with pytest.raises(grpc.RpcError) as e:
+        stub.PutScene(service_pb2.PutSceneRequest(scene=scene), timeout=5)
+    assert e.value.code() == grpc.StatusCode.INVALID_ARGUMENT
+    assert "scene.robot[0].shape.mesh.path" in e.value.details()
+    channel.close()
+
+
+def test_plan_then_merge_planned_paths(client):
+    planned = client.plan(count=3, planner="rrtconnect", time_per_path_s=2.0, seed=7,
+                          start=[30, 62], goal=[67, 35])
+    assert len(planned) == 3
+    merged = client.merge(planned, measure="length")
+    assert merged.result.quality.length <= min(i.quality.length for i in merged.result.inputs)
+
+
+def test_cancel_mid_merge_frees_the_workers(server, client):
+    before = server.metric("grpc_server_handled_total", grpc_method="MergePaths",
+                           grpc_code="CANCELLED")
+    request = service_pb2.MergePathsRequest(
+        session=client.session, paths=hgraph_client.make_paths(densified(40)),
+        options=merge_pb2.MergeOptions(variant=merge_pb2.VARIANT_ALL_PAIRS),
+        progress_interval_ms=10)
+    call = client.merge_stream(request, timeout=60)
+    started = time.monotonic()
+    for event in call:
+        if event.HasField("progress") and event.progress.phase == "check":
+            call.cancel()
+            break
+    with pytest.raises(grpc.RpcError) as e:
+        for _ in call:
+            pass
+    assert e.value.code() == grpc.StatusCode.CANCELLED
+    # The workers are free again: a small merge completes promptly.
+    merged = client.merge(input_paths(), measure="length", timeout=10)
+    assert merged.result.stats.collision_checks > 0
+    assert time.monotonic() - started < 10
+    deadline = time.monotonic() + 10
+    while server.metric("grpc_server_handled_total", grpc_method="MergePaths",
+                        grpc_code="CANCELLED") <= before:
+        assert time.monotonic() < deadline, "the cancelled merge was never finished"
+        time.sleep(0.05)
+
+
+def test_deadline_exceeded(client):
+    started = time.monotonic()
+    with pytest.raises(hgraph_client.HgraphError) as e:
+        client.merge(densified(40), variant="all-pairs", timeout=0.5)
+    assert e.value.code == grpc.StatusCode.DEADLINE_EXCEEDED
+    assert time.monotonic() - started < 5
+    assert client.merge(input_paths(), timeout=10).result.quality.length > 0
+
+
+def test_unknown_session_and_hgraph(client):
+    unknown = "sessions/" + "0" * 32
+    with pytest.raises(hgraph_client.HgraphError) as e:
+        client.merge(input_paths(), session=unknown)
+    assert e.value.code == grpc.StatusCode.NOT_FOUND and "session" in e.value.message
+    with pytest.raises(hgraph_client.HgraphError) as e:
+        client.merge(input_paths(), session="sessions/not-hex")
+    assert e.value.code == grpc.StatusCode.INVALID_ARGUMENT and "session" in e.value.message
+    with pytest.raises(hgraph_client.HgraphError) as e:
+        client.requery(client.session + "/hgraphs/999", "length")
+    assert e.value.code == grpc.StatusCode.NOT_FOUND and "hgraph" in e.value.message
+    with pytest.raises(hgraph_client.HgraphError) as e:
+        client.get_session(unknown)
+    assert e.value.code == grpc.StatusCode.NOT_FOUND
+
+
+def test_over_limit_batch_and_bad_values(client):
+    with pytest.raises(hgraph_client.HgraphError) as e:
+        client.merge([input_paths().paths[0]] * 9)
+    assert e.value.code == grpc.StatusCode.RESOURCE_EXHAUSTED
+    assert "paths.paths" in e.value.message and "--max-paths" in e.value.message
+    with pytest.raises(hgraph_client.HgraphError) as e:
+        client.merge(input_paths(), measure="inverse-clearance", k=-1)
+    assert e.value.code == grpc.StatusCode.INVALID_ARGUMENT and "measure.k" in e.value.message
+    with pytest.raises(hgraph_client.HgraphError) as e:
+        client.merge(input_paths(), measure="safe-length", safety=1000)
+    assert e.value.code == grpc.StatusCode.FAILED_PRECONDITION
+    assert "measure.safety" in e.value.message
+
+
+def test_sessions_list_get_delete(server):
+    with server.client() as c:
+        scene = c.upload_scene(DATA / "scene.json")
+        a = c.create_session(scene)
+        b = c.create_session(scene)
+        assert a.name != b.name and re.fullmatch(r"sessions/[0-9a-f]{32}", a.name)
+        names = {s.name for s in c.list_sessions()}
+        assert {a.name, b.name} <= names
+        c.delete_session(a.name)
+        with pytest.raises(hgraph_client.HgraphError) as e:
+            c.get_session(a.name)
+        assert e.value.code == grpc.StatusCode.NOT_FOUND
+        assert c.get_session(b.name).scene == scene
+
+
+def test_two_sessions_on_one_scene_load_it_once(server):
+    with server.client() as c:
+        # A scene no other test uses, so that its first load is this test's.
+        scene = scene_pb2.Scene()
+        from google.protobuf import json_format
+        json_format.Parse((DATA / "scene.json").read_text(), scene)
+        scene.description = "test_two_sessions_on_one_scene_load_it_once"
+        loads = server.metric("hgraph_scene_loads_total")
+        hits = server.metric("hgraph_scene_cache_hits_total")
+        digest = c.upload_scene(scene)
+        first = c.create_session(digest)
+        second = c.create_session(digest)
+        assert first.scene == second.scene
+        assert server.metric("hgraph_scene_loads_total") == loads + 1
+        assert server.metric("hgraph_scene_cache_hits_total") >= hits + 2
+
+
+def test_admission_queue_full_is_resource_exhausted():
+    s = Server("--threads", "1", "--max-pending", "1")
+    try:
+        with s.client() as c:
+            c.create_session(c.upload_scene(DATA / "scene.json"))
+            request = service_pb2.MergePathsRequest(
+                session=c.session, paths=hgraph_client.make_paths(densified(40)),
+                options=merge_pb2.MergeOptions(variant=merge_pb2.VARIANT_ALL_PAIRS))
+            call = c.merge_stream(request, timeout=60)
+            next(call)  # the slow merge is running and holds the only admission slot
+            with pytest.raises(hgraph_client.HgraphError) as e:
+                c.merge(input_paths(), timeout=10)
+            assert e.value.code == grpc.StatusCode.RESOURCE_EXHAUSTED
+            assert "--max-pending" in e.value.message
+            call.cancel()
+    finally:
+        assert s.stop() == 0, "".join(s.log)
+
+
+def test_eviction_under_a_small_budget_gives_not_found(server):
+    budget = 300_000
+    s = Server("--cache-bytes", str(budget))
+    try:
+        with s.client() as c:
+            c.create_session(c.upload_scene(DATA / "scene.json"))
+            first_session = c.session
+            first = c.merge(input_paths(), variant="all-pairs", measure="inverse-clearance")
+            assert first.hgraph
+            # A second scene and its H-Graph push the first scene's entries out.
+            scene = scene_pb2.Scene()
+            from google.protobuf import json_format
+            json_format.Parse((DATA / "scene.json").read_text(), scene)
+            scene.description = "another scene"
+            c.create_session(c.upload_scene(scene))
+            second = c.merge(input_paths(), variant="all-pairs", measure="inverse-clearance")
+            assert second.hgraph
+            assert s.metric("hgraph_cache_bytes") <= budget
+            assert s.metric("hgraph_cache_evictions_total") > 0
+            with pytest.raises(hgraph_client.HgraphError) as e:
+                c.requery(first.hgraph, "length")
+            assert e.value.code == grpc.StatusCode.NOT_FOUND
+            with pytest.raises(hgraph_client.HgraphError) as e:
+                c.merge(input_paths(), session=first_session)
+            assert e.value.code == grpc.StatusCode.NOT_FOUND and "PutScene" in e.value.message
+            assert c.requery(second.hgraph, "length").stats.collision_checks == 0
+            # A merge whose H-Graph alone exceeds the budget still returns its result.
+            big = c.merge(densified(30), variant="all-pairs")
+            assert big.hgraph == "" and big.result.quality.length > 0
+            assert s.metric("hgraph_cache_bytes") <= budget
+    finally:
+        assert s.stop() == 0, "".join(s.log)
+
+
+def test_sigterm_cancels_in_flight_merge_after_grace_and_exits_0():
+    s = Server("--grace-s", "0.5")
+    with s.client() as c:
+        c.create_session(c.upload_scene(DATA / "scene.json"))
+        request = service_pb2.MergePathsRequest(
+            session=c.session, paths=hgraph_client.make_paths(densified(40)),
+            options=merge_pb2.MergeOptions(variant=merge_pb2.VARIANT_ALL_PAIRS))
+        call = c.merge_stream(request, timeout=60)
+        next(call)
+        started = time.monotonic()
+        s.proc.send_signal(signal.SIGTERM)
+        with pytest.raises(grpc.RpcError) as e:
+            for _ in call:
+                pass
+        assert e.value.code() in (grpc.StatusCode.CANCELLED, grpc.StatusCode.UNAVAILABLE)
+        assert s.proc.wait(timeout=15) == 0
+        assert time.monotonic() - started < 10
+    assert any("shut down cleanly" in line for line in s.log) or s.proc.returncode == 0
