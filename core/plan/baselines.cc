@@ -1,0 +1,78 @@
+#include "core/plan/baselines.h"
+
+#include <ompl/geometric/PathHybridization.h>
+#include <ompl/geometric/PathSimplifier.h>
+
+#include <string>
+
+#include "core/common/error.h"
+#include "core/plan/ompl_bridge.h"
+
+namespace hgraph {
+namespace ob = ompl::base;
+namespace og = ompl::geometric;
+using namespace plan_internal;
+
+namespace {
+
+void ValidatePath(const Space& space, const InputPath& path, const std::string& field) {
+  if (path.waypoints.size() < 2) {
+    throw InputError(field, "needs at least two waypoints, got " +
+                                std::to_string(path.waypoints.size()));
+  }
+  for (size_t k = 0; k < path.waypoints.size(); ++k) {
+    space.Validate(path.waypoints[k], field + ".waypoints[" + std::to_string(k) + "]");
+  }
+}
+
+}  // namespace
+
+InputPath ShortcutPath(const MotionChecker& checker, const InputPath& path,
+                       const ShortcutOptions& options) {
+  const Space& space = checker.space();
+  ValidatePath(space, path, "path");
+  QuietOmplLogging();
+  auto lock = LockOmplRandomness();
+  SeedOmpl(options.seed);
+  const ob::SpaceInformationPtr si = MakeSpaceInformation(checker, options.resolution);
+  og::PathGeometric omplPath = ToOmplPath(si, space, path);
+  og::PathSimplifier simplifier(si);
+  for (int round = 0; round < options.max_rounds; ++round) {
+    // Non-short-circuit: both heuristics run every round.
+    const bool reduced = simplifier.reduceVertices(omplPath);
+    const bool shortened = simplifier.shortcutPath(omplPath);
+    if (!reduced && !shortened) break;
+  }
+  InputPath out = FromOmplPath(space, omplPath, path.name);
+  // OMPL keeps the end states, but through a copy; restore them bit for bit.
+  out.waypoints.front() = path.waypoints.front();
+  out.waypoints.back() = path.waypoints.back();
+  return out;
+}
+
+InputPath OmplHybridize(const MotionChecker& checker, const std::vector<InputPath>& paths,
+                        const OmplHybridizationOptions& options) {
+  const Space& space = checker.space();
+  if (paths.empty()) throw InputError("paths", "needs at least one path");
+  for (size_t i = 0; i < paths.size(); ++i) {
+    ValidatePath(space, paths[i], "paths[" + std::to_string(i) + "]");
+  }
+  QuietOmplLogging();
+  const ob::SpaceInformationPtr si = MakeSpaceInformation(checker, options.resolution);
+  og::PathHybridization hybridization(si);
+  // The hybridizer keeps pointers to the recorded paths; they live until it is done.
+  std::vector<og::PathGeometricPtr> recorded;
+  for (const InputPath& p : paths) {
+    recorded.push_back(std::make_shared<og::PathGeometric>(ToOmplPath(si, space, p)));
+    hybridization.recordPath(recorded.back(), options.match_across_gaps);
+  }
+  hybridization.computeHybridPath();
+  const og::PathGeometricPtr& hybrid = hybridization.getHybridPath();
+  if (hybrid == nullptr || hybrid->getStateCount() < 2) {
+    throw Error(ErrorCode::kFailedPrecondition, "paths",
+                "OMPL's PathHybridization found no hybrid path");
+  }
+  return FromOmplPath(space, *hybrid, "ompl-hybridization");
+}
+
+}  // namespace hgraph

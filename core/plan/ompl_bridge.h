@@ -1,0 +1,56 @@
+// Our configuration space and motion checker as OMPL sees them. Internal to core/plan: the only
+// header of the project that includes OMPL, so that OMPL stays a private dependency.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <string>
+
+#include <ompl/base/MotionValidator.h>
+#include <ompl/base/SpaceInformation.h>
+#include <ompl/base/StateValidityChecker.h>
+#include <ompl/geometric/PathGeometric.h>
+
+#include "core/hgraph/hgraph.h"
+#include "core/motion/motion_checker.h"
+#include "core/space/space.h"
+
+namespace hgraph::plan_internal {
+
+// A compound OMPL space with one subspace per component of `space`, in order: RealVector, SO2,
+// SO3, SE2, SE3, each with our bounds and our translation and rotation weights, so that OMPL's
+// distance (and with it its nearest neighbours, path lengths and shortcut decisions) equals
+// Space::Distance. `resolution` is OMPL's longest valid segment fraction, the same fraction of
+// the extent as our local planner's.
+ompl::base::StateSpacePtr MakeStateSpace(const Space& space, double resolution);
+
+void ToOmpl(const Space& space, const Config& q, ompl::base::State* state);
+Config FromOmpl(const Space& space, const ompl::base::State* state);
+
+// Validity and motion checks answered by `checker` (which must outlive the returned object). The
+// motion validator runs MotionChecker::CheckEdge, so OMPL accepts exactly the motions that a
+// merge accepts. Thread safe as far as the checker is (PRM checks from two threads).
+ompl::base::SpaceInformationPtr MakeSpaceInformation(const MotionChecker& checker,
+                                                     double resolution);
+
+ompl::geometric::PathGeometric ToOmplPath(const ompl::base::SpaceInformationPtr& si,
+                                          const Space& space, const InputPath& path);
+// Copies the states; `name` becomes the path's name.
+InputPath FromOmplPath(const Space& space, const ompl::geometric::PathGeometric& path,
+                       std::string name);
+
+// Serialises every use of OMPL's process-wide seed generator: ompl::RNG::setSeed reseeds the
+// generator from which each RNG that OMPL constructs afterwards (planners, samplers, nearest
+// neighbour structures, the simplifier) draws its own seed. Hold the lock from setSeed until the
+// last OMPL object that draws random numbers has been constructed *and used*, since samplers are
+// made lazily inside solve().
+std::unique_lock<std::mutex> LockOmplRandomness();
+// Reseeds OMPL's generator (caller holds the lock); silences OMPL's complaint that seeds were
+// already drawn, which is expected: we reseed before every run on purpose.
+void SeedOmpl(uint64_t seed);
+
+// Quiets OMPL's informational logging once per process (it would drown the CLI's output).
+void QuietOmplLogging();
+
+}  // namespace hgraph::plan_internal

@@ -1,0 +1,208 @@
+#include "core/plan/plan.h"
+
+#include <ompl/base/PlannerTerminationCondition.h>
+#include <ompl/base/ProblemDefinition.h>
+#include <ompl/base/objectives/PathLengthOptimizationObjective.h>
+#include <ompl/geometric/PathGeometric.h>
+#include <ompl/geometric/planners/prm/LazyPRM.h>
+#include <ompl/geometric/planners/prm/PRM.h>
+#include <ompl/geometric/planners/prm/PRMstar.h>
+#include <ompl/geometric/planners/rrt/RRT.h>
+#include <ompl/geometric/planners/rrt/RRTConnect.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include "core/common/error.h"
+#include "core/plan/baselines.h"
+#include "core/plan/ompl_bridge.h"
+
+namespace hgraph {
+namespace ob = ompl::base;
+namespace og = ompl::geometric;
+using namespace plan_internal;
+
+namespace {
+
+// The paper's PRM: a new milestone is only connected to milestones of other components, so
+// the roadmap stays a forest (Nieuwenhuisen and Overmars: cycles cost a quadratic number of
+// edges; the paper's H-Graph adds the cycles afterwards, between paths).
+class ForestPRM final : public og::PRM {
+ public:
+  explicit ForestPRM(const ob::SpaceInformationPtr& si) : og::PRM(si) {
+    setName("PRM-forest");
+    setConnectionFilter(
+        [this](const Vertex& m, const Vertex& n) { return !sameComponent(m, n); });
+  }
+};
+
+ob::PlannerPtr MakePlanner(PlannerType type, const ob::SpaceInformationPtr& si) {
+  switch (type) {
+    case PlannerType::kPRM: return std::make_shared<ForestPRM>(si);
+    case PlannerType::kPRMCycles: return std::make_shared<og::PRM>(si);
+    case PlannerType::kPRMStar: return std::make_shared<og::PRMstar>(si);
+    case PlannerType::kRRT: return std::make_shared<og::RRT>(si);
+    case PlannerType::kRRTConnect: return std::make_shared<og::RRTConnect>(si);
+    case PlannerType::kLazyPRM: return std::make_shared<og::LazyPRM>(si);
+  }
+  HGRAPH_CHECK(false);
+  return nullptr;
+}
+
+void ValidateEndpoint(const MotionChecker& checker, const Config& q, const std::string& field) {
+  const Space& space = checker.space();
+  space.Validate(q, field);
+  if (!space.InBounds(q)) throw InputError(field, "is outside the space's bounds");
+  if (!checker.IsValid(space.Normalize(q))) throw InputError(field, "is in collision");
+}
+
+// The index of the first edge the checker rejects, or -1. With clearance asked for, the local
+// planner also certifies the stretches between its samples (and rejects touching contact), as a
+// merge does when it reports the inputs' quality: a path that passes here is valid there too.
+int FirstInvalidEdge(const MotionChecker& checker, const InputPath& path) {
+  for (size_t k = 0; k + 1 < path.waypoints.size(); ++k) {
+    const EdgeReport report = checker.CheckEdge(
+        {.from = &path.waypoints[k], .to = &path.waypoints[k + 1], .need_clearance = true});
+    if (report.state != EdgeState::kValid) return static_cast<int>(k);
+  }
+  return -1;
+}
+
+double PathLength(const Space& space, const InputPath& path) {
+  double length = 0;
+  for (size_t k = 0; k + 1 < path.waypoints.size(); ++k) {
+    length += space.Distance(path.waypoints[k], path.waypoints[k + 1]);
+  }
+  return length;
+}
+
+std::string FormatSeconds(double s) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%g s", s);
+  return text;
+}
+
+}  // namespace
+
+const char* PlannerTypeName(PlannerType type) {
+  switch (type) {
+    case PlannerType::kPRM: return "prm";
+    case PlannerType::kPRMCycles: return "prm-cycles";
+    case PlannerType::kPRMStar: return "prmstar";
+    case PlannerType::kRRT: return "rrt";
+    case PlannerType::kRRTConnect: return "rrtconnect";
+    case PlannerType::kLazyPRM: return "lazyprm";
+  }
+  return "?";
+}
+
+PlannerType ParsePlannerType(const std::string& name, const std::string& field) {
+  for (PlannerType type : {PlannerType::kPRM, PlannerType::kPRMCycles, PlannerType::kPRMStar,
+                           PlannerType::kRRT, PlannerType::kRRTConnect, PlannerType::kLazyPRM}) {
+    if (name == PlannerTypeName(type)) return type;
+  }
+  if (name == "rrt-connect") return PlannerType::kRRTConnect;
+  if (name == "prm-star") return PlannerType::kPRMStar;
+  if (name == "lazy-prm") return PlannerType::kLazyPRM;
+  throw InputError(field, "unknown planner '" + name +
+                              "' (known: prm, prm-cycles, prmstar, rrt, rrtconnect, lazyprm)");
+}
+
+PlanResult PlanPaths(const MotionChecker& checker, const PlanRequest& request) {
+  const Space& space = checker.space();
+  if (request.count < 1) {
+    throw InputError("count", "must be at least 1, got " + std::to_string(request.count));
+  }
+  if (!(request.time_s > 0) || !std::isfinite(request.time_s)) {
+    throw InputError("time_s", "must be positive and finite, got " + std::to_string(request.time_s));
+  }
+  ValidateEndpoint(checker, request.start, "start");
+  ValidateEndpoint(checker, request.goal, "goal");
+  const Config start = space.Normalize(request.start);
+  const Config goal = space.Normalize(request.goal);
+  QuietOmplLogging();
+
+  PlanResult result;
+  for (int index = 0; index < request.count; ++index) {
+    request.cancel.ThrowIfStopped();
+    PlanAttempt attempt{.index = index};
+    const std::string name = std::string(PlannerTypeName(request.planner)) + "-" +
+                             std::to_string(index);
+    InputPath path;
+    {
+      auto lock = LockOmplRandomness();
+      SeedOmpl(request.seed * 0x100000001b3ULL + static_cast<uint64_t>(index));
+      const ob::SpaceInformationPtr si = MakeSpaceInformation(checker, request.resolution);
+      auto pdef = std::make_shared<ob::ProblemDefinition>(si);
+      ob::ScopedState<> s(si), g(si);
+      ToOmpl(space, start, s.get());
+      ToOmpl(space, goal, g.get());
+      // A tolerance of 0 would make RRT's goal test depend on rounding; the path's last state
+      // is replaced by the exact goal below.
+      pdef->setStartAndGoalStates(s, g, 1e-9);
+      if (request.planner == PlannerType::kPRMCycles) {
+        // An objective whose threshold (0) is never met: PRM keeps improving until the time is
+        // up instead of returning its first solution.
+        pdef->setOptimizationObjective(std::make_shared<ob::PathLengthOptimizationObjective>(si));
+      }
+      const ob::PlannerPtr planner = MakePlanner(request.planner, si);
+      planner->setProblemDefinition(pdef);
+      planner->setup();
+
+      const CancelToken cancel = request.cancel;
+      const ob::PlannerTerminationCondition ptc = ob::plannerOrTerminationCondition(
+          ob::timedPlannerTerminationCondition(request.time_s),
+          ob::PlannerTerminationCondition([cancel] { return cancel.stopped(); }));
+      const auto t0 = std::chrono::steady_clock::now();
+      const ob::PlannerStatus status = planner->solve(ptc);
+      attempt.elapsed_ms =
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      attempt.status = status.asString();
+      request.cancel.ThrowIfStopped();
+
+      if (pdef->hasExactSolution()) {
+        const auto* solution = pdef->getSolutionPath()->as<og::PathGeometric>();
+        path = FromOmplPath(space, *solution, name);
+        if (request.simplify) {
+          path = ShortcutPath(checker, path,
+                              {.seed = request.seed + static_cast<uint64_t>(index),
+                               .resolution = request.resolution});
+        }
+      } else {
+        attempt.status = "no path in " + FormatSeconds(request.time_s) + " (OMPL: " +
+                         attempt.status + ")";
+      }
+    }
+    if (!path.waypoints.empty()) {
+      // Exact endpoints: every input of a merge must share them bit for bit.
+      const double tolerance = 1e-6;
+      if (space.Distance(path.waypoints.front(), start) > tolerance ||
+          space.Distance(path.waypoints.back(), goal) > tolerance) {
+        attempt.status = "planner returned a path with other endpoints";
+        path.waypoints.clear();
+      } else {
+        path.waypoints.front() = start;
+        path.waypoints.back() = goal;
+        if (path.waypoints.size() == 1) path.waypoints.push_back(goal);
+        const int bad = FirstInvalidEdge(checker, path);
+        if (bad >= 0) {
+          attempt.status = "rejected: edge " + std::to_string(bad) + " is invalid under our checker";
+          path.waypoints.clear();
+        }
+      }
+    }
+    if (!path.waypoints.empty()) {
+      attempt.found = true;
+      attempt.waypoints = static_cast<int>(path.waypoints.size());
+      attempt.length = PathLength(space, path);
+      if (request.on_path) request.on_path(index, path, attempt.elapsed_ms);
+      result.paths.push_back(std::move(path));
+    }
+    result.attempts.push_back(attempt);
+  }
+  return result;
+}
+
+}  // namespace hgraph

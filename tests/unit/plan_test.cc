@@ -1,0 +1,265 @@
+// OMPL's planners and baselines on a real scene (the built-in maze), checked with our own local
+// planner.
+#include "core/plan/plan.h"
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "core/adapter/scene_proto.h"
+#include "core/collision/collision_world.h"
+#include "core/common/error.h"
+#include "core/motion/local_planner.h"
+#include "core/plan/baselines.h"
+
+namespace hgraph {
+namespace {
+
+struct Fixture {
+  std::shared_ptr<const Scene> scene;
+  std::shared_ptr<const CollisionWorld> world;
+  std::unique_ptr<LocalPlanner> planner;
+  double resolution = 0;
+};
+
+Fixture LoadBuiltIn(const std::string& name) {
+  const std::string file = std::string(HGRAPH_SOURCE_DIR) + "/scenes/" + name + "/scene.json";
+  Fixture f;
+  f.resolution = SceneResolution(ReadSceneFile(file));
+  f.scene = LoadSceneFile(file);
+  f.world = std::make_shared<const CollisionWorld>(f.scene);
+  f.planner = std::make_unique<LocalPlanner>(f.world, LocalPlannerOptions{.resolution = f.resolution});
+  return f;
+}
+
+PlanRequest MazeRequest(const Fixture& f, PlannerType planner, uint64_t seed) {
+  return PlanRequest{.planner = planner,
+                     .start = *f.scene->start,
+                     .goal = *f.scene->goal,
+                     .count = 2,
+                     .time_s = 5.0,
+                     .seed = seed,
+                     .resolution = f.resolution};
+}
+
+// Every edge passes the local planner in the strict form a merge uses for its inputs.
+void ExpectValid(const LocalPlanner& planner, const InputPath& path) {
+  ASSERT_GE(path.waypoints.size(), 2u);
+  for (size_t j = 0; j + 1 < path.waypoints.size(); ++j) {
+    const EdgeReport r = planner.CheckEdge(
+        {.from = &path.waypoints[j], .to = &path.waypoints[j + 1], .need_clearance = true});
+    EXPECT_EQ(r.state, EdgeState::kValid) << path.name << " edge " << j;
+  }
+}
+
+double Length(const Space& space, const InputPath& path) {
+  double length = 0;
+  for (size_t j = 0; j + 1 < path.waypoints.size(); ++j) {
+    length += space.Distance(path.waypoints[j], path.waypoints[j + 1]);
+  }
+  return length;
+}
+
+class PlanTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() { maze_ = new Fixture(LoadBuiltIn("maze")); }
+  static void TearDownTestSuite() {
+    delete maze_;
+    maze_ = nullptr;
+  }
+  static Fixture* maze_;
+};
+Fixture* PlanTest::maze_ = nullptr;
+
+TEST(PlannerTypeTest, NamesRoundTripAndUnknownNamesAreListed) {
+  for (PlannerType type : {PlannerType::kPRM, PlannerType::kPRMCycles, PlannerType::kPRMStar,
+                           PlannerType::kRRT, PlannerType::kRRTConnect, PlannerType::kLazyPRM}) {
+    EXPECT_EQ(ParsePlannerType(PlannerTypeName(type), "planner"), type);
+  }
+  EXPECT_EQ(ParsePlannerType("rrt-connect", "planner"), PlannerType::kRRTConnect);
+  try {
+    ParsePlannerType("est", "--planner");
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "--planner");
+    EXPECT_NE(std::string(e.what()).find("unknown planner 'est'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("prm-cycles"), std::string::npos) << e.what();
+  }
+}
+
+TEST_F(PlanTest, EveryPlannerFindsValidPathsWithExactEndpoints) {
+  for (PlannerType type : {PlannerType::kPRM, PlannerType::kPRMCycles, PlannerType::kPRMStar,
+                           PlannerType::kRRT, PlannerType::kRRTConnect, PlannerType::kLazyPRM}) {
+    SCOPED_TRACE(PlannerTypeName(type));
+    PlanRequest request = MazeRequest(*maze_, type, 7);
+    // The planners that use their whole budget need not run for long on a 2D maze.
+    if (type == PlannerType::kPRMCycles || type == PlannerType::kPRMStar) request.time_s = 0.5;
+    int callbacks = 0;
+    request.on_path = [&](int index, const InputPath& path, double) {
+      EXPECT_EQ(index, callbacks++);
+      EXPECT_FALSE(path.waypoints.empty());
+    };
+    const PlanResult result = PlanPaths(*maze_->planner, request);
+    ASSERT_EQ(result.attempts.size(), 2u);
+    ASSERT_EQ(result.paths.size(), 2u) << result.attempts[0].status;
+    EXPECT_EQ(callbacks, 2);
+    for (const InputPath& path : result.paths) {
+      EXPECT_EQ(path.waypoints.front(), *maze_->scene->start);
+      EXPECT_EQ(path.waypoints.back(), *maze_->scene->goal);
+      ExpectValid(*maze_->planner, path);
+    }
+    EXPECT_EQ(result.paths[1].name, std::string(PlannerTypeName(type)) + "-1");
+    EXPECT_TRUE(result.attempts[1].found);
+    EXPECT_NEAR(result.attempts[1].length, Length(maze_->scene->space, result.paths[1]), 1e-9);
+  }
+}
+
+// Planners that stop at their first solution and sample single-threaded reproduce exactly.
+TEST_F(PlanTest, SameSeedSamePathsForSingleThreadedPlanners) {
+  for (PlannerType type : {PlannerType::kRRT, PlannerType::kRRTConnect, PlannerType::kLazyPRM}) {
+    SCOPED_TRACE(PlannerTypeName(type));
+    const PlanResult a = PlanPaths(*maze_->planner, MazeRequest(*maze_, type, 11));
+    const PlanResult b = PlanPaths(*maze_->planner, MazeRequest(*maze_, type, 11));
+    const PlanResult c = PlanPaths(*maze_->planner, MazeRequest(*maze_, type, 12));
+    ASSERT_EQ(a.paths.size(), 2u);
+    ASSERT_EQ(b.paths.size(), 2u);
+    ASSERT_EQ(c.paths.size(), 2u);
+    for (size_t i = 0; i < a.paths.size(); ++i) {
+      EXPECT_EQ(a.paths[i].waypoints, b.paths[i].waypoints) << "path " << i;
+    }
+    // Paths within one request differ (each has its own seed), and another seed differs.
+    EXPECT_NE(a.paths[0].waypoints, a.paths[1].waypoints);
+    EXPECT_NE(a.paths[0].waypoints, c.paths[0].waypoints);
+  }
+}
+
+// The paper's PRM finds its path in the first timed sampling phase here, so it reproduces too.
+TEST_F(PlanTest, SameSeedSamePathsForForestPRMOnAnEasyScene) {
+  const PlanResult a = PlanPaths(*maze_->planner, MazeRequest(*maze_, PlannerType::kPRM, 3));
+  const PlanResult b = PlanPaths(*maze_->planner, MazeRequest(*maze_, PlannerType::kPRM, 3));
+  ASSERT_EQ(a.paths.size(), 2u);
+  ASSERT_EQ(b.paths.size(), 2u);
+  for (size_t i = 0; i < a.paths.size(); ++i) {
+    if (a.attempts[i].elapsed_ms < 300 && b.attempts[i].elapsed_ms < 300) {
+      EXPECT_EQ(a.paths[i].waypoints, b.paths[i].waypoints) << "path " << i;
+    }
+  }
+}
+
+TEST(PlanNoPathTest, NoPathInTimeIsReportedNotThrown) {
+  // A point in a box split by a wall: start and goal are in different rooms.
+  auto scene = std::make_shared<Scene>(Scene{
+      .name = "two-rooms",
+      .space = Space::RealVector(Eigen::Vector2d(0, 0), Eigen::Vector2d(10, 10)),
+  });
+  Obstacle wall{.name = "wall",
+                .shape = Shape{.type = ShapeType::kBox, .box_size = Eigen::Vector3d(0.5, 20, 1)}};
+  wall.pose.translation() = Eigen::Vector3d(5, 5, 0);
+  scene->obstacles.push_back(wall);
+  scene->robot.push_back(
+      RobotBody{.name = "point", .shape = Shape{.type = ShapeType::kSphere, .radius = 0.1}});
+  auto world = std::make_shared<const CollisionWorld>(scene);
+  const LocalPlanner planner(world);
+  for (PlannerType type : {PlannerType::kPRM, PlannerType::kRRTConnect, PlannerType::kRRT}) {
+    SCOPED_TRACE(PlannerTypeName(type));
+    const PlanResult result = PlanPaths(
+        planner, {.planner = type, .start = Eigen::Vector2d(2, 5), .goal = Eigen::Vector2d(8, 5),
+                  .count = 2, .time_s = 0.2});
+    EXPECT_TRUE(result.paths.empty());
+    ASSERT_EQ(result.attempts.size(), 2u);
+    for (const PlanAttempt& a : result.attempts) {
+      EXPECT_FALSE(a.found);
+      EXPECT_NE(a.status.find("no path"), std::string::npos) << a.status;
+      EXPECT_GE(a.elapsed_ms, 150);
+    }
+  }
+}
+
+TEST_F(PlanTest, BadRequestsNameTheField) {
+  const auto field_of = [&](PlanRequest request) {
+    try {
+      PlanPaths(*maze_->planner, request);
+    } catch (const InputError& e) {
+      return e.field() + " | " + e.what();
+    }
+    return std::string("no error");
+  };
+  PlanRequest request = MazeRequest(*maze_, PlannerType::kRRT, 1);
+  request.count = 0;
+  EXPECT_EQ(field_of(request).substr(0, 8), "count | ");
+  request = MazeRequest(*maze_, PlannerType::kRRT, 1);
+  request.time_s = 0;
+  EXPECT_EQ(field_of(request).substr(0, 9), "time_s | ");
+  request = MazeRequest(*maze_, PlannerType::kRRT, 1);
+  request.start = Eigen::Vector2d(0.1, 0.1);  // inside the outer wall
+  EXPECT_NE(field_of(request).find("start | start: is in collision"), std::string::npos)
+      << field_of(request);
+  request = MazeRequest(*maze_, PlannerType::kRRT, 1);
+  request.goal = Eigen::Vector3d(1, 1, 1);
+  EXPECT_EQ(field_of(request).substr(0, 7), "goal | ");
+}
+
+TEST_F(PlanTest, CancelStopsPlanning) {
+  PlanRequest request = MazeRequest(*maze_, PlannerType::kPRMStar, 1);
+  request.time_s = 30;
+  request.cancel.Cancel();
+  try {
+    PlanPaths(*maze_->planner, request);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kCancelled);
+  }
+}
+
+TEST_F(PlanTest, ShortcutAndOmplHybridizationKeepPathsValidAndNoLonger) {
+  PlanRequest request = MazeRequest(*maze_, PlannerType::kPRM, 5);
+  request.count = 3;
+  const PlanResult planned = PlanPaths(*maze_->planner, request);
+  ASSERT_EQ(planned.paths.size(), 3u);
+  const Space& space = maze_->scene->space;
+  double shortest = 1e300;
+  for (const InputPath& path : planned.paths) shortest = std::min(shortest, Length(space, path));
+
+  const InputPath shortcut = ShortcutPath(*maze_->planner, planned.paths[0],
+                                          {.seed = 1, .resolution = maze_->resolution});
+  ExpectValid(*maze_->planner, shortcut);
+  EXPECT_EQ(shortcut.waypoints.front(), planned.paths[0].waypoints.front());
+  EXPECT_EQ(shortcut.waypoints.back(), planned.paths[0].waypoints.back());
+  EXPECT_LT(Length(space, shortcut), Length(space, planned.paths[0]));
+  // Seeded: the same seed shortcuts the same way.
+  EXPECT_EQ(shortcut.waypoints, ShortcutPath(*maze_->planner, planned.paths[0],
+                                             {.seed = 1, .resolution = maze_->resolution})
+                                    .waypoints);
+
+  const InputPath hybrid =
+      OmplHybridize(*maze_->planner, planned.paths, {.resolution = maze_->resolution});
+  ExpectValid(*maze_->planner, hybrid);
+  EXPECT_EQ(hybrid.waypoints.front(), *maze_->scene->start);
+  EXPECT_EQ(hybrid.waypoints.back(), *maze_->scene->goal);
+  EXPECT_LE(Length(space, hybrid), shortest + 1e-9);
+
+  try {
+    ShortcutPath(*maze_->planner, InputPath{.name = "one", .waypoints = {*maze_->scene->start}});
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "path");
+  }
+}
+
+// The built-in scenes load, their queries are valid, and the paper's PRM solves each quickly.
+TEST(BuiltInScenesTest, PRMSolvesEveryScene) {
+  for (const std::string name : {"maze", "grid", "wrench", "double_wrench", "circles"}) {
+    SCOPED_TRACE(name);
+    const Fixture f = LoadBuiltIn(name);
+    ASSERT_TRUE(f.scene->start && f.scene->goal);
+    const PlanResult result = PlanPaths(
+        *f.planner, {.planner = PlannerType::kPRM, .start = *f.scene->start,
+                     .goal = *f.scene->goal, .count = 1, .time_s = 10, .seed = 1,
+                     .resolution = f.resolution});
+    ASSERT_EQ(result.paths.size(), 1u) << result.attempts[0].status;
+    ExpectValid(*f.planner, result.paths[0]);
+  }
+}
+
+}  // namespace
+}  // namespace hgraph
