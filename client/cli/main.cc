@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
   std::vector<Subcommand> subcommands = {
       AddMergeCommand(app),
       AddCheckCommand(app),
+      AddPlanCommand(app),
   };
 
   try {

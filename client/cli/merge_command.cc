@@ -5,6 +5,7 @@
 
 #include "client/cli/cli_common.h"
 #include "client/cli/command.h"
+#include "client/cli/shortcut_step.h"
 #include "core/adapter/json_io.h"
 #include "core/adapter/merge_proto.h"
 #include "core/adapter/path_io.h"
@@ -33,6 +34,8 @@ struct MergeFlags {
   double endpoint_tolerance = 0;
   int threads = 0;
   bool quiet = false;
+  bool shortcut = false;
+  uint64_t shortcut_seed = 1;
   // Set when the flag was given; unset flags leave the proto field unset (core defaults).
   CLI::Option* radius_opt = nullptr;
   CLI::Option* phi_opt = nullptr;
@@ -143,8 +146,14 @@ int RunMerge(const MergeFlags& f) {
   printer.Finish();
 
   if (!f.out.empty()) WriteTextFile(f.out, ToJson(MergeResultToProto(result)));
-  if (!f.out_path.empty()) WritePathsFile(f.out_path, {result.path});
+  ShortcutStep shortcut;
+  if (f.shortcut) {
+    shortcut = ShortcutMergedPath(*loaded.planner, result, request.measure, resolution,
+                                  f.shortcut_seed);
+  }
+  if (!f.out_path.empty()) WritePathsFile(f.out_path, {f.shortcut ? shortcut.path : result.path});
   PrintResult(result);
+  if (f.shortcut) PrintShortcutRow(shortcut, result);
   return kExitOk;
 }
 
@@ -188,6 +197,11 @@ Subcommand AddMergeCommand(CLI::App& parent) {
                       "Largest distance between inputs' start (goal) waypoints (default 1e-6)");
   app->add_option("--threads", f.threads, "Worker threads (0 = all cores)")->capture_default_str();
   app->add_flag("-q,--quiet", f.quiet, "No progress on stderr");
+  app->add_flag("--shortcut", f.shortcut,
+                "Then shortcut the merged path with OMPL's PathSimplifier (hybridize-then-"
+                "shortcut); --out-path gets the shortcut path, --out keeps the merge's result");
+  app->add_option("--shortcut-seed", f.shortcut_seed, "Seed of the shortcutting")
+      ->capture_default_str();
   return Subcommand{.app = app, .run = [flags] { return RunMerge(*flags); }};
 }
 
