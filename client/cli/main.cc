@@ -3,6 +3,7 @@
 #include <vector>
 
 #include "client/cli/command.h"
+#include "client/cli/remote.h"
 #include "core/common/error.h"
 
 int main(int argc, char** argv) {
@@ -13,9 +14,10 @@ int main(int argc, char** argv) {
       "hgraph");
   app.require_subcommand(1);
   std::vector<Subcommand> subcommands = {
-      AddMergeCommand(app),
+      WithServer(AddMergeCommand(app), RemoteKind::kMerge),
       AddCheckCommand(app),
-      AddPlanCommand(app),
+      WithServer(AddPlanCommand(app), RemoteKind::kPlan),
+      AddRequeryCommand(app),
   };
 
   try {

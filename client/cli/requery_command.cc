@@ -1,0 +1,46 @@
+// `hgraph requery`: search an H-Graph kept by hgraph-server under another measure.
+#include <memory>
+#include <string>
+
+#include "client/cli/cli_common.h"
+#include "client/cli/command.h"
+#include "client/cli/remote.h"
+#include "core/adapter/json_io.h"
+#include "core/common/error.h"
+
+namespace hgraph::cli {
+
+Subcommand AddRequeryCommand(CLI::App& parent) {
+  CLI::App* app = parent.add_subcommand(
+      "requery", "Search an H-Graph kept by hgraph-server under another measure (no new "
+                 "collision checks where stored clearance profiles suffice)");
+  auto flags = std::make_shared<RemoteOptions>();
+  auto hgraph = std::make_shared<std::string>();
+  auto out = std::make_shared<std::string>();
+  app->add_option("--server", flags->server, "hgraph-server at HOST:PORT")->required();
+  app->add_option("--hgraph", *hgraph, "H-Graph name from a merge (sessions/<id>/hgraphs/<n>)")
+      ->required();
+  app->add_option("--measure", "Measure: length, inverse-clearance, bottleneck-clearance, "
+                               "safe-length")
+      ->default_val("length");
+  app->add_option("--k", "Inverse-clearance exponent (default 3)");
+  app->add_option("--safety", "Minimum clearance C for safe-length");
+  app->add_option("--out", *out, "Write the MergeResult JSON here");
+  app->add_option("--timeout", flags->timeout_s, "Deadline, seconds");
+  return Subcommand{app, [app, flags, hgraph, out] {
+                      RemoteClient client(flags->server, flags->timeout_s);
+                      v1::RequeryRequest request;
+                      request.set_hgraph(*hgraph);
+                      try {
+                        *request.mutable_measure() = MeasureFromFlags(app);
+                      } catch (const Error& e) {
+                        RethrowWithFlag(e, {{"measure.k", "--k"}, {"measure.safety", "--safety"}});
+                      }
+                      const v1::RequeryResponse response = client.Requery(request);
+                      if (!out->empty()) WriteTextFile(*out, ToJson(response.result()));
+                      PrintRemoteResult(response.result(), response.hgraph());
+                      return kExitOk;
+                    }};
+}
+
+}  // namespace hgraph::cli
