@@ -288,6 +288,7 @@ int RunRemoteMerge(CLI::App* app, const RemoteOptions& remote) {
   const ProgressCallback report = printer.callback();
   const v1::MergePathsResponse response =
       client.Merge(request, [&](const v1::MergeProgress& p) {
+        if (!report) return;  // --quiet
         report(Progress{.phase = p.phase(),
                         .done = p.done(),
                         .total = p.total(),

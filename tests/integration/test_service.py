@@ -375,3 +375,46 @@ def test_sigterm_cancels_in_flight_merge_after_grace_and_exits_0():
         assert s.proc.wait(timeout=15) == 0
         assert time.monotonic() - started < 10
     assert any("shut down cleanly" in line for line in s.log) or s.proc.returncode == 0
+
+
+def run_cli(*args, timeout=120):
+    return subprocess.run([CLI, *args], capture_output=True, text=True, timeout=timeout)
+
+
+def test_cli_remote_merge_requery_plan(server, tmp_path):
+    merged = run_cli("merge", "--server", server.target, "--scene", str(DATA / "scene.json"),
+                     "--paths", str(DATA / "paths.txt"), "--measure", "inverse-clearance",
+                     "--variant", "all-pairs", "--out", str(tmp_path / "result.json"))
+    assert merged.returncode == 0, merged.stderr
+    assert "session sessions/" in merged.stderr
+    # Not a terminal: plain progress lines, no carriage-return redraws.
+    assert "\r" not in merged.stderr
+    hgraph = re.search(r"^hgraph (\S+)$", merged.stdout, re.M).group(1)
+    assert (tmp_path / "result.json").exists()
+
+    again = run_cli("requery", "--server", server.target, "--hgraph", hgraph,
+                    "--measure", "bottleneck-clearance")
+    assert again.returncode == 0, again.stderr
+    assert "0 edges checked" in again.stdout
+    assert "0 collision checks, 0 distance queries" in again.stdout
+
+    missing = run_cli("requery", "--server", server.target, "--hgraph",
+                      "sessions/" + "0" * 32 + "/hgraphs/1")
+    assert missing.returncode == 2 and "NOT_FOUND" in missing.stderr
+
+    planned = run_cli("plan", "--server", server.target, "--scene",
+                      str(ROOT / "scenes" / "circles" / "scene.json"), "--count", "2",
+                      "--out", str(tmp_path / "planned.txt"))
+    assert planned.returncode == 0, planned.stderr
+    assert "2 paths planned" in planned.stdout
+
+
+def test_cli_remote_deadline(server, tmp_path):
+    paths = tmp_path / "dense.txt"
+    paths.write_text("\n\n".join("\n".join(" ".join(map(str, q)) for q in p)
+                                 for p in densified(40)) + "\n")
+    started = time.monotonic()
+    late = run_cli("merge", "--server", server.target, "--scene", str(DATA / "scene.json"),
+                   "--paths", str(paths), "--variant", "all-pairs", "--timeout", "0.5", "-q")
+    assert late.returncode == 2 and "DEADLINE_EXCEEDED" in late.stderr, late.stderr
+    assert time.monotonic() - started < 10
