@@ -57,7 +57,7 @@ int RunPlan(const PlanFlags& f) {
   request.simplify = f.simplify;
   request.resolution = resolution;
   const double straight = space.Distance(request.start, request.goal);
-  std::printf("%-16s %-22s %10s %9s %12s %9s\n", "path", "status", "time (ms)", "waypoints",
+  std::printf("%-16s %-36s %10s %9s %12s %9s\n", "path", "status", "time (ms)", "waypoints",
               "length", "/ direct");
   request.on_path = [](int, const InputPath&, double) { std::fflush(stdout); };
 
@@ -74,19 +74,21 @@ int RunPlan(const PlanFlags& f) {
                              std::to_string(a.index);
     if (a.found) {
       ++found;
-      std::printf("%-16s %-22.22s %10.1f %9d %12s %9s\n", name.c_str(), a.status.c_str(),
+      std::printf("%-16s %-36.36s %10.1f %9d %12s %9s\n", name.c_str(), a.status.c_str(),
                   a.elapsed_ms, a.waypoints, Cell(a.length, 12).c_str(),
                   Cell(straight > 0 ? a.length / straight : 0, 9, 3).c_str());
     } else {
-      std::printf("%-16s %-22.22s %10.1f %9s %12s %9s\n", name.c_str(), a.status.c_str(),
+      std::printf("%-16s %-36.36s %10.1f %9s %12s %9s\n", name.c_str(), a.status.c_str(),
                   a.elapsed_ms, "-", "-", "-");
       missing += (missing.empty() ? "" : ", ") + std::to_string(a.index);
     }
   }
-  if (!f.out.empty()) WritePathsFile(f.out, result.paths);
+  // Nothing found, nothing written: a stale file from an earlier run would read as success.
+  const bool write = !f.out.empty() && found > 0;
+  if (write) WritePathsFile(f.out, result.paths);
   std::printf("found %d of %d paths with %s in %g s each (seed %llu)%s%s\n", found, f.count,
               PlannerTypeName(request.planner), f.time_s, static_cast<unsigned long long>(f.seed),
-              f.out.empty() ? "" : "; wrote ", f.out.c_str());
+              write ? "; wrote " : "", write ? f.out.c_str() : "");
   if (found < f.count) {
     std::fprintf(stderr,
                  "error: %s found no path within %g s in %d of %d runs (index %s); %s\n",
