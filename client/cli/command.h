@@ -22,5 +22,6 @@ struct Subcommand {
 Subcommand AddMergeCommand(CLI::App& parent);
 Subcommand AddCheckCommand(CLI::App& parent);
 Subcommand AddPlanCommand(CLI::App& parent);
+Subcommand AddRenderCommand(CLI::App& parent);
 
 }  // namespace hgraph::cli

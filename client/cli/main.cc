@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
       WithServer(AddMergeCommand(app), RemoteKind::kMerge),
       AddCheckCommand(app),
       WithServer(AddPlanCommand(app), RemoteKind::kPlan),
+      AddRenderCommand(app),
       AddRequeryCommand(app),
   };
 

@@ -13,6 +13,7 @@
 #include "core/hgraph/bridge_candidates.h"
 #include "core/measure/measure.h"
 #include "core/merge/merge.h"
+#include "core/render/svg_render.h"
 
 namespace hgraph::cli {
 namespace {
@@ -22,6 +23,7 @@ struct MergeFlags {
   std::string paths;
   std::string out;
   std::string out_path;
+  std::string svg;
   std::string variant = "edit-distance";
   std::string measure = "length";
   double radius = 0;
@@ -152,6 +154,9 @@ int RunMerge(const MergeFlags& f) {
                                   f.shortcut_seed);
   }
   if (!f.out_path.empty()) WritePathsFile(f.out_path, {f.shortcut ? shortcut.path : result.path});
+  if (!f.svg.empty()) {
+    WriteTextFile(f.svg, RenderSvg(*loaded.scene, MergeRenderRequest(request.paths, result)));
+  }
   PrintResult(result);
   if (f.shortcut) PrintShortcutRow(shortcut, result);
   return kExitOk;
@@ -172,6 +177,7 @@ Subcommand AddMergeCommand(CLI::App& parent) {
   app->add_option("--out", f.out, "Write the MergeResult JSON here");
   app->add_option("--out-path", f.out_path,
                   "Write the merged path here (.json: PathSet; otherwise OMPL text)");
+  app->add_option("--svg", f.svg, "Draw the scene, the inputs and the merged path here (SVG)");
   app->add_option("--variant", f.variant,
                   "H-Graph variant: all-pairs, neighborhood, knn, edit-distance, "
                   "edit-distance-neighborhood")

@@ -1,0 +1,169 @@
+// SVG pictures: structure of the document, what is drawn for which robot, and the errors. That
+// librsvg renders the pictures is checked end to end in tests/integration/picture_test.py.
+#include "core/render/svg_render.h"
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "core/collision/collision_world.h"
+#include "core/common/error.h"
+#include "core/motion/local_planner.h"
+#include "tests/unit/test_scenes.h"
+
+namespace hgraph {
+namespace {
+
+int Count(const std::string& text, const std::string& what) {
+  int n = 0;
+  for (size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
+// A bar rotating through a gap between two boxes (SE(2)).
+Scene BarScene() {
+  Scene scene{.name = "bar & gap",
+              .space = Space::SE2(Eigen::Vector2d(0, 0), Eigen::Vector2d(10, 10))};
+  for (double x : {2.0, 8.0}) {
+    Obstacle wall{.name = "wall",
+                  .shape = Shape{.type = ShapeType::kBox, .box_size = Eigen::Vector3d(4, 1, 1)}};
+    wall.pose.translation() = Eigen::Vector3d(x, 5, 0);
+    scene.obstacles.push_back(wall);
+  }
+  scene.robot.push_back(RobotBody{
+      .name = "bar", .shape = Shape{.type = ShapeType::kBox, .box_size = Eigen::Vector3d(1.5, 0.3, 0.3)}});
+  return scene;
+}
+
+InputPath Path(const std::string& name, std::vector<Eigen::Vector3d> points) {
+  InputPath path{.name = name};
+  for (const auto& p : points) path.waypoints.push_back(p);
+  return path;
+}
+
+TEST(RenderTest, MergeOfCirclesHasEveryLayer) {
+  const auto scene = testing::CirclesScene();
+  const auto world = std::make_shared<const CollisionWorld>(scene);
+  LocalPlanner planner(world, LocalPlannerOptions{.resolution = 0.005});
+  const std::vector<InputPath> inputs = testing::CirclePaths();
+  const MergeResult result = Merge(planner, MergeRequest{.paths = inputs});
+
+  const std::string svg = RenderSvg(*scene, MergeRenderRequest(inputs, result));
+  EXPECT_TRUE(svg.starts_with("<?xml"));
+  EXPECT_TRUE(svg.ends_with("</svg>\n"));
+  EXPECT_EQ(Count(svg, "<svg "), 1);
+  // One path element per disc, the inputs grey, the merged path red, once each in the legend.
+  EXPECT_EQ(Count(svg, "<path d="), static_cast<int>(scene->obstacles.size()));
+  EXPECT_EQ(Count(svg, "stroke=\"#a0a0a0\""), 2 * static_cast<int>(inputs.size()));
+  EXPECT_EQ(Count(svg, "stroke=\"#d62728\""), 2);
+  // The legend carries the merge's numbers; a point robot has no footprint entry.
+  char length[32];
+  std::snprintf(length, sizeof(length), "length %.4g", result.quality.length);
+  EXPECT_NE(svg.find(length), std::string::npos) << length;
+  EXPECT_NE(svg.find(">merged<"), std::string::npos);
+  EXPECT_EQ(svg.find(">robot<"), std::string::npos);
+}
+
+TEST(RenderTest, RotatingRobotIsDrawnAlongTheMergedPath) {
+  const Scene scene = BarScene();
+  const InputPath input = Path("in", {{5, 2, 0}, {5, 8, 1.5}});
+  RenderRequest request{.inputs = {RenderPath{.path = input}},
+                        .merged = RenderPath{.path = input},
+                        .footprints = 7};
+  const std::string svg = RenderSvg(scene, request);
+  // One more for the legend's swatch.
+  EXPECT_EQ(Count(svg, "fill=\"#1f77b4\" fill-opacity"), 7 + 1);
+  EXPECT_NE(svg.find("bar &amp; gap"), std::string::npos) << "names are escaped";
+  // Without a result the legend computes the length with the space's metric (translation 6,
+  // rotation 0.5 * 1.5) and says nothing about clearance.
+  EXPECT_NE(svg.find("length 6.75"), std::string::npos);
+  EXPECT_NE(svg.find("min clearance n/a"), std::string::npos);
+
+  request.footprints = 0;
+  EXPECT_EQ(Count(RenderSvg(scene, request), "fill=\"#1f77b4\" fill-opacity"), 2 + 1)
+      << "start and goal only";
+}
+
+TEST(RenderTest, TranslatingRobotIsDrawnAtStartAndGoalOnly) {
+  Scene scene{.name = "square",
+              .space = Space::RealVector(Eigen::Vector2d(0, 0), Eigen::Vector2d(10, 10))};
+  scene.robot.push_back(RobotBody{.name = "square", .shape = Shape{.type = ShapeType::kBox}});
+  InputPath path{.name = "p"};
+  path.waypoints = {Eigen::Vector2d(1, 1), Eigen::Vector2d(5, 5), Eigen::Vector2d(9, 9)};
+  const std::string svg =
+      RenderSvg(scene, RenderRequest{.merged = RenderPath{.path = path}, .footprints = 9});
+  EXPECT_EQ(Count(svg, "fill=\"#1f77b4\" fill-opacity"), 2 + 1);
+}
+
+TEST(RenderTest, MeshTrianglesAreTurnedToOneWinding) {
+  // A unit cube seen from above: its top and bottom faces project with opposite windings; with
+  // the nonzero rule they would cancel unless every triangle is turned the same way.
+  auto mesh = std::make_shared<Mesh>();
+  for (int i = 0; i < 8; ++i) mesh->vertices.emplace_back(i & 1, (i >> 1) & 1, (i >> 2) & 1);
+  mesh->triangles = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}};  // bottom (down), top (up)
+  Scene scene{.name = "cube", .space = Space::RealVector(Eigen::Vector2d(0, 0), Eigen::Vector2d(4, 4))};
+  scene.obstacles.push_back(Obstacle{.shape = Shape{.type = ShapeType::kMesh, .mesh = mesh}});
+  scene.robot.push_back(RobotBody{.shape = Shape{.type = ShapeType::kSphere, .radius = 0}});
+  const std::string svg = RenderSvg(scene, RenderRequest{.inputs = {RenderPath{
+                                                             .path = InputPath{.name = "p",
+                                                                               .waypoints = {Eigen::Vector2d(3, 3), Eigen::Vector2d(3.5, 3.5)}}}}});
+  const size_t at = svg.find("<path d=\"");
+  ASSERT_NE(at, std::string::npos);
+  const std::string d = svg.substr(at + 9, svg.find('"', at + 9) - at - 9);
+  EXPECT_EQ(Count(d, "M"), 4);
+  // Each triangle is "Mx0 y0Lx1 y1Lx2 y2Z"; all four must wind the same way.
+  int positive = 0;
+  for (size_t m = d.find('M'); m != std::string::npos; m = d.find('M', m + 1)) {
+    double x[3], y[3];
+    ASSERT_EQ(std::sscanf(d.c_str() + m, "M%lf %lfL%lf %lfL%lf %lfZ", &x[0], &y[0], &x[1], &y[1],
+                          &x[2], &y[2]),
+              6);
+    positive += ((x[1] - x[0]) * (y[2] - y[0]) - (y[1] - y[0]) * (x[2] - x[0])) > 0;
+  }
+  EXPECT_TRUE(positive == 0 || positive == 4) << positive;
+}
+
+TEST(RenderTest, PlanesProjectTheRightAxes) {
+  EXPECT_EQ(ParsePlane("xy", "f"), Plane::kXY);
+  EXPECT_EQ(ParsePlane("xz", "f"), Plane::kXZ);
+  EXPECT_EQ(ParsePlane("yz", "f"), Plane::kYZ);
+  try {
+    ParsePlane("top", "--plane");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_STREQ(e.what(), "--plane: plane must be xy, xz or yz, got 'top'");
+  }
+  // A 3D scene seen from the side still renders (a 2D view of the z range).
+  Scene scene{.name = "s", .space = Space::SE3(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(4, 4, 2))};
+  scene.robot.push_back(RobotBody{.shape = Shape{.type = ShapeType::kCylinder, .radius = 0.2, .length = 1}});
+  Eigen::VectorXd a(7), b(7);
+  a << 1, 1, 1, 0, 0, 0, 1;
+  b << 3, 3, 1.5, 0, 0.7071067811865476, 0, 0.7071067811865476;
+  InputPath path{.name = "p", .waypoints = {a, b}};
+  for (Plane plane : {Plane::kXY, Plane::kXZ, Plane::kYZ}) {
+    const std::string svg =
+        RenderSvg(scene, RenderRequest{.merged = RenderPath{.path = path}, .plane = plane});
+    EXPECT_NE(svg.find(std::string("(") + PlaneName(plane) + " plane)"), std::string::npos);
+  }
+}
+
+TEST(RenderTest, BadRequestsNameTheField) {
+  const Scene scene = BarScene();
+  InputPath bad{.name = "bad"};
+  bad.waypoints = {Eigen::Vector2d(1, 1)};
+  try {
+    RenderSvg(scene, RenderRequest{.inputs = {RenderPath{.path = bad}}});
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "request.inputs[0].waypoints[0]");
+  }
+  try {
+    RenderSvg(scene, RenderRequest{.width_px = 10});
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "request.width_px");
+  }
+}
+
+}  // namespace
+}  // namespace hgraph
