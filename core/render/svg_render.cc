@@ -295,6 +295,13 @@ class SvgWriter {
     Vec2 hi = -lo;
     double robot_radius = 0;
     for (const RobotBody& body : scene_.robot) {
+      // Meshes are measured in the body frame: OMPL.app robots sit far from their mesh origin.
+      if (body.shape.type == ShapeType::kMesh && body.shape.mesh != nullptr) {
+        for (const Vec3& v : body.shape.mesh->vertices) {
+          robot_radius = std::max(robot_radius, (body.offset * v).norm());
+        }
+        continue;
+      }
       robot_radius =
           std::max(robot_radius, body.offset.translation().norm() + ShapeRadius(body.shape));
     }
