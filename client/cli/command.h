@@ -23,5 +23,6 @@ Subcommand AddMergeCommand(CLI::App& parent);
 Subcommand AddCheckCommand(CLI::App& parent);
 Subcommand AddPlanCommand(CLI::App& parent);
 Subcommand AddRenderCommand(CLI::App& parent);
+Subcommand AddImportCfgCommand(CLI::App& parent);
 
 }  // namespace hgraph::cli

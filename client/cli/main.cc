@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
       AddCheckCommand(app),
       WithServer(AddPlanCommand(app), RemoteKind::kPlan),
       AddRenderCommand(app),
+      AddImportCfgCommand(app),
       AddRequeryCommand(app),
   };
 

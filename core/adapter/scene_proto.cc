@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "core/adapter/json_io.h"
+#include "core/adapter/ompl_cfg.h"
 #include "core/common/error.h"
 #include "core/scene/mesh_loader.h"
 
@@ -375,6 +376,9 @@ std::shared_ptr<const Scene> SceneFromProto(const v1::Scene& proto, const std::s
 }
 
 v1::Scene ReadSceneFile(const std::string& path) {
+  // OMPL.app problems are accepted wherever a scene file is (their meshes resolve relative to the
+  // .cfg, as a scene file's do).
+  if (std::filesystem::path(path).extension() == ".cfg") return ReadOmplAppProblem(path);
   v1::Scene proto;
   ReadJsonFile(path, &proto);
   return proto;

@@ -39,7 +39,8 @@ Eigen::Isometry3d PoseFromProto(const v1::Pose& proto, const std::string& field)
 std::shared_ptr<const Scene> SceneFromProto(const v1::Scene& proto, const std::string& base_dir,
                                             const BlobResolver& resolver);
 
-// Reads a proto3 JSON scene file (snake_case names; unknown fields rejected, naming the file).
+// Reads a proto3 JSON scene file (snake_case names; unknown fields rejected, naming the file),
+// or an OMPL.app problem if the name ends in .cfg (see ompl_cfg.h).
 v1::Scene ReadSceneFile(const std::string& path);
 // ReadSceneFile + SceneFromProto with meshes relative to the file's folder and no blob store.
 std::shared_ptr<const Scene> LoadSceneFile(const std::string& path);

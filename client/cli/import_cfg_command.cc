@@ -1,0 +1,46 @@
+// `hgraph import-cfg`: an OMPL.app problem (.cfg + COLLADA meshes) as a Scene JSON file.
+#include <cstdio>
+#include <filesystem>
+#include <string>
+
+#include "client/cli/command.h"
+#include "core/adapter/json_io.h"
+#include "core/adapter/ompl_cfg.h"
+#include "core/adapter/scene_proto.h"
+
+namespace hgraph::cli {
+namespace {
+
+struct ImportCfgFlags {
+  std::string cfg;
+  std::string out;
+};
+
+int RunImportCfg(const ImportCfgFlags& f) {
+  v1::Scene scene = ReadOmplAppProblem(f.cfg);
+  // Build it once so that a problem that would not load is reported now, not at the first merge.
+  SceneFromProto(scene, std::filesystem::path(f.cfg).parent_path().string(), BlobResolver());
+  // The meshes stay where they are, referenced relative to the new file.
+  RebaseMeshPaths(std::filesystem::path(f.cfg).parent_path().string(),
+                  std::filesystem::path(f.out).parent_path().string(), &scene);
+  WriteTextFile(f.out, ToJson(scene));
+  std::printf("wrote %s: %s, space %s, robot %s, world %s\n", f.out.c_str(), scene.name().c_str(),
+              scene.space().components(0).type() == v1::Component::TYPE_SE3 ? "SE(3)" : "SE(2)",
+              scene.robot(0).shape().mesh().path().c_str(),
+              scene.obstacles(0).shape().mesh().path().c_str());
+  return kExitOk;
+}
+
+}  // namespace
+
+Subcommand AddImportCfgCommand(CLI::App& parent) {
+  auto flags = std::make_shared<ImportCfgFlags>();
+  CLI::App* app = parent.add_subcommand(
+      "import-cfg", "Convert an OMPL.app problem (.cfg with COLLADA meshes) to a Scene JSON file.");
+  app->add_option("cfg", flags->cfg, "OMPL.app problem file")->required();
+  app->add_option("--out", flags->out, "Scene JSON to write (meshes referenced by path)")
+      ->required();
+  return Subcommand{.app = app, .run = [flags] { return RunImportCfg(*flags); }};
+}
+
+}  // namespace hgraph::cli

@@ -1,0 +1,245 @@
+#include "core/adapter/ompl_cfg.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <map>
+#include <optional>
+#include <sstream>
+
+#include "core/adapter/json_io.h"
+#include "core/common/error.h"
+#include "core/scene/mesh_loader.h"
+
+namespace hgraph {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string Trim(const std::string& s) {
+  size_t b = 0;
+  size_t e = s.size();
+  while (b < e && std::isspace(static_cast<unsigned char>(s[b]))) ++b;
+  while (e > b && std::isspace(static_cast<unsigned char>(s[e - 1]))) --e;
+  return s.substr(b, e - b);
+}
+
+// The key = value lines of the [problem] section. Other sections ([benchmark], [planner]) are
+// for OMPL's benchmark tool and are skipped.
+class ProblemSection {
+ public:
+  ProblemSection(const std::string& text, std::string source) : source_(std::move(source)) {
+    std::istringstream in(text);
+    std::string line;
+    std::string section;
+    bool seen = false;
+    while (std::getline(in, line)) {
+      line = Trim(line);
+      if (line.empty() || line[0] == '#' || line[0] == ';') continue;
+      if (line.front() == '[') {
+        section = Trim(line.substr(1, line.find(']') - 1));
+        seen = seen || section == "problem";
+        continue;
+      }
+      if (section != "problem") continue;
+      const size_t eq = line.find('=');
+      if (eq == std::string::npos) {
+        throw InputError(source_ + ": [problem]", "expected 'key = value', got '" + line + "'");
+      }
+      values_[Trim(line.substr(0, eq))] = Trim(line.substr(eq + 1));
+    }
+    if (!seen) throw InputError(source_, "no [problem] section (not an OMPL.app problem file)");
+  }
+
+  std::string Field(const std::string& key) const { return source_ + ": [problem]." + key; }
+  bool Has(const std::string& key) const { return values_.count(key) > 0; }
+
+  std::string String(const std::string& key) const {
+    const auto it = values_.find(key);
+    if (it == values_.end() || it->second.empty()) throw InputError(Field(key), "is missing");
+    return it->second;
+  }
+
+  double Number(const std::string& key, std::optional<double> fallback = std::nullopt) const {
+    const auto it = values_.find(key);
+    if (it == values_.end()) {
+      if (fallback) return *fallback;
+      throw InputError(Field(key), "is missing");
+    }
+    size_t used = 0;
+    double v = 0;
+    try {
+      v = std::stod(it->second, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != it->second.size() || !std::isfinite(v)) {
+      throw InputError(Field(key), "must be a finite number, got '" + it->second + "'");
+    }
+    return v;
+  }
+
+ private:
+  std::string source_;
+  std::map<std::string, std::string> values_;
+};
+
+// Assimp's default COLLADA import turns a file's up axis into Y (assimp's convention) by a
+// rotation of the root node; our mesh loader skips that (its scenes are Z-up by definition), so
+// the rotation is put back here as a pose. The matrices are assimp's ColladaLoader ones.
+Eigen::Matrix3d AssimpUpAxisRotation(const std::string& mesh_path) {
+  std::string ext = fs::path(mesh_path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  if (ext != ".dae") return Eigen::Matrix3d::Identity();
+  const std::string text = ReadTextFile(mesh_path);
+  const size_t open = text.find("<up_axis>");
+  const size_t close = text.find("</up_axis>", open);
+  if (open == std::string::npos || close == std::string::npos) return Eigen::Matrix3d::Identity();
+  const std::string axis = Trim(text.substr(open + 9, close - open - 9));
+  Eigen::Matrix3d r = Eigen::Matrix3d::Identity();
+  if (axis == "Z_UP") {
+    r << 1, 0, 0, 0, 0, 1, 0, -1, 0;  // (x, y, z) -> (x, z, -y)
+  } else if (axis == "X_UP") {
+    r << 0, -1, 0, 1, 0, 0, 0, 0, 1;  // (x, y, z) -> (-y, x, z)
+  }
+  return r;
+}
+
+void SetPose(const Eigen::Isometry3d& pose, v1::Pose* proto) {
+  const Eigen::Quaterniond q(pose.linear());
+  proto->clear_position();
+  proto->clear_orientation();
+  for (int k = 0; k < 3; ++k) proto->add_position(pose.translation()[k]);
+  for (double v : {q.x(), q.y(), q.z(), q.w()}) proto->add_orientation(v);
+}
+
+// The mesh file named by `key`, as written and as found (relative to the .cfg's folder).
+struct MeshFile {
+  std::string as_written;
+  std::string resolved;
+};
+
+MeshFile FindMesh(const ProblemSection& problem, const std::string& key, const fs::path& dir) {
+  MeshFile mesh{.as_written = problem.String(key)};
+  const fs::path p(mesh.as_written);
+  mesh.resolved = (p.is_absolute() ? p : dir / p).string();
+  std::error_code ec;
+  if (!fs::exists(mesh.resolved, ec)) {
+    throw Error(ErrorCode::kNotFound, problem.Field(key),
+                "mesh file '" + mesh.resolved + "' does not exist");
+  }
+  return mesh;
+}
+
+void AddConfig(const ProblemSection& problem, const std::string& prefix, bool three_d,
+               v1::Configuration* out) {
+  const double theta = problem.Number(prefix + ".theta", 0.0);
+  out->add_values(problem.Number(prefix + ".x"));
+  out->add_values(problem.Number(prefix + ".y"));
+  if (!three_d) {
+    out->add_values(theta);
+    return;
+  }
+  out->add_values(problem.Number(prefix + ".z"));
+  Eigen::Vector3d axis(problem.Number(prefix + ".axis.x", 0.0),
+                       problem.Number(prefix + ".axis.y", 0.0),
+                       problem.Number(prefix + ".axis.z", 0.0));
+  Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
+  if (axis.norm() > 1e-12) {
+    q = Eigen::Quaterniond(Eigen::AngleAxisd(theta, axis.normalized()));
+  } else if (std::abs(theta) > 1e-12) {
+    throw InputError(problem.Field(prefix + ".axis.x"),
+                     "the rotation axis is zero but " + prefix + ".theta is not");
+  }
+  for (double v : {q.x(), q.y(), q.z(), q.w()}) out->add_values(v);
+}
+
+}  // namespace
+
+v1::Scene ReadOmplAppProblem(const std::string& cfg_path) {
+  const ProblemSection problem(ReadTextFile(cfg_path), cfg_path);
+  const fs::path dir = fs::path(cfg_path).parent_path();
+  // OMPL.app tells 2D from 3D problems by the coordinates given.
+  const bool three_d = problem.Has("start.z") || problem.Has("start.axis.x");
+
+  const MeshFile world = FindMesh(problem, "world", dir);
+  const MeshFile robot = FindMesh(problem, "robot", dir);
+  const MeshLoadOptions load{.apply_node_transforms = true};
+  const auto world_mesh = LoadMeshFile(world.resolved, load, problem.Field("world"));
+  const auto robot_mesh = LoadMeshFile(robot.resolved, load, problem.Field("robot"));
+  const Eigen::Matrix3d world_up = AssimpUpAxisRotation(world.resolved);
+  const Eigen::Matrix3d robot_up = AssimpUpAxisRotation(robot.resolved);
+
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& v : robot_mesh->vertices) centroid += robot_up * v;
+  centroid /= static_cast<double>(robot_mesh->vertices.size());
+  if (!three_d) centroid.z() = 0;  // OMPL.app's 2D robots keep their own height
+
+  v1::Scene scene;
+  const std::string name = problem.Has("name") ? problem.String("name") : "";
+  scene.set_name(name.empty() ? fs::path(cfg_path).stem().string() : name);
+  scene.set_description("OMPL.app problem " + fs::path(cfg_path).filename().string());
+
+  v1::Obstacle* obstacle = scene.add_obstacles();
+  obstacle->set_name("world");
+  obstacle->mutable_shape()->mutable_mesh()->set_path(world.as_written);
+  Eigen::Isometry3d world_pose = Eigen::Isometry3d::Identity();
+  world_pose.linear() = world_up;
+  SetPose(world_pose, obstacle->mutable_pose());
+
+  v1::RobotBody* body = scene.add_robot();
+  body->set_name("robot");
+  body->mutable_shape()->mutable_mesh()->set_path(robot.as_written);
+  body->set_component(0);
+  Eigen::Isometry3d offset = Eigen::Isometry3d::Identity();
+  offset.linear() = robot_up;
+  offset.translation() = -centroid;
+  SetPose(offset, body->mutable_offset());
+
+  // Bounds of the reference point: the volume if given, else the world's box widened by 5%.
+  const int dims = three_d ? 3 : 2;
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Vector3d hi = -lo;
+  for (const Eigen::Vector3d& v : world_mesh->vertices) {
+    lo = lo.cwiseMin(world_up * v);
+    hi = hi.cwiseMax(world_up * v);
+  }
+  const Eigen::Vector3d widen = 0.05 * (hi - lo);
+  lo -= widen;
+  hi += widen;
+  v1::Component* component = scene.mutable_space()->add_components();
+  component->set_type(three_d ? v1::Component::TYPE_SE3 : v1::Component::TYPE_SE2);
+  component->set_name("robot");
+  const char* axes[] = {"x", "y", "z"};
+  for (int k = 0; k < dims; ++k) {
+    const double low = problem.Number(std::string("volume.min.") + axes[k], lo[k]);
+    const double high = problem.Number(std::string("volume.max.") + axes[k], hi[k]);
+    if (!(low < high)) {
+      throw InputError(problem.Field(std::string("volume.max.") + axes[k]),
+                       "must exceed volume.min." + std::string(axes[k]));
+    }
+    component->add_lower(low);
+    component->add_upper(high);
+  }
+  AddConfig(problem, "start", three_d, scene.mutable_start());
+  AddConfig(problem, "goal", three_d, scene.mutable_goal());
+  return scene;
+}
+
+void RebaseMeshPaths(const std::string& from_dir, const std::string& to_dir, v1::Scene* scene) {
+  const fs::path from = fs::absolute(from_dir.empty() ? "." : from_dir).lexically_normal();
+  const fs::path to = fs::absolute(to_dir.empty() ? "." : to_dir).lexically_normal();
+  auto rebase = [&](v1::Shape* shape) {
+    if (!shape->has_mesh() || !shape->mesh().has_path()) return;
+    const fs::path p(shape->mesh().path());
+    if (p.is_absolute()) return;
+    shape->mutable_mesh()->set_path((from / p).lexically_normal().lexically_relative(to).string());
+  };
+  for (v1::Obstacle& obstacle : *scene->mutable_obstacles()) rebase(obstacle.mutable_shape());
+  for (v1::RobotBody& body : *scene->mutable_robot()) rebase(body.mutable_shape());
+}
+
+}  // namespace hgraph

@@ -1,0 +1,34 @@
+// OMPL.app problems: the [problem] section of a .cfg file and its meshes, as an hgraph.v1 Scene,
+// following the conventions OMPL.app's own planners use so that a configuration means the same
+// robot placement here as there:
+//  - meshes are found relative to the .cfg file; assimp's default up-axis handling is kept (a
+//    Z_UP COLLADA file is turned Y_UP, as OMPL.app sees it) and node transforms are applied;
+//  - the configuration is the position of the robot mesh's vertex centroid (in 2D its x and y
+//    only), so the robot is shifted by that centroid;
+//  - 2D: space SE(2), pose Translation(x, y, 0) * RotZ(theta), start.x/y/theta;
+//    3D: space SE(3), pose Translation(x, y, z) * AngleAxis(theta, axis),
+//        start.x/y/z/axis.x/axis.y/axis.z/theta (same for goal);
+//  - volume.min.* / volume.max.* bound the reference point; without them the bounds are the
+//    world mesh's bounding box, widened by 5% on each side (OMPL.app infers them likewise);
+//  - distance weights are OMPL's defaults (SE(2) rotation 0.5, SE(3) 1).
+// The centroid is taken over the mesh's distinct vertex positions; OMPL.app counts a position
+// once per distinct normal, which gives the same point for boxes and other symmetric solids but
+// can differ slightly for irregular meshes.
+#pragma once
+
+#include <string>
+
+#include "hgraph/v1/scene.pb.h"
+
+namespace hgraph {
+
+// Reads the problem. Mesh paths in the result are as written in the .cfg (relative to its
+// folder unless absolute), so SceneFromProto(proto, folder of cfg_path) loads it. Errors are
+// InputErrors naming "<cfg_path>: [problem].<key>", or Error(kNotFound) for a missing file.
+v1::Scene ReadOmplAppProblem(const std::string& cfg_path);
+
+// Rewrites every relative mesh path of `scene` from relative-to-`from_dir` to
+// relative-to-`to_dir` (for writing the scene next to another file).
+void RebaseMeshPaths(const std::string& from_dir, const std::string& to_dir, v1::Scene* scene);
+
+}  // namespace hgraph

@@ -1,0 +1,208 @@
+// OMPL.app problem import: the conventions of ompl_cfg.h, checked against assimp's default
+// import (what OMPL.app itself sees) on the problem in tests/data/ompl_app.
+#include "core/adapter/ompl_cfg.h"
+
+#include <assimp/Importer.hpp>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "core/adapter/json_io.h"
+#include "core/adapter/path_io.h"
+#include "core/adapter/scene_proto.h"
+#include "core/common/error.h"
+
+namespace hgraph {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kDir = std::string(HGRAPH_SOURCE_DIR) + "/tests/data/ompl_app";
+const std::string kCfg = kDir + "/wall_planar.cfg";
+
+struct Box3 {
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300);
+  Eigen::Vector3d hi = Eigen::Vector3d::Constant(-1e300);
+  void Add(const Eigen::Vector3d& v) {
+    lo = lo.cwiseMin(v);
+    hi = hi.cwiseMax(v);
+  }
+};
+
+void AddNode(const aiScene& scene, const aiNode& node, const aiMatrix4x4& parent, Box3* box) {
+  const aiMatrix4x4 t = parent * node.mTransformation;
+  for (unsigned i = 0; i < node.mNumMeshes; ++i) {
+    const aiMesh& mesh = *scene.mMeshes[node.mMeshes[i]];
+    for (unsigned k = 0; k < mesh.mNumVertices; ++k) {
+      const aiVector3D v = t * mesh.mVertices[k];
+      box->Add(Eigen::Vector3d(v.x, v.y, v.z));
+    }
+  }
+  for (unsigned c = 0; c < node.mNumChildren; ++c) AddNode(scene, *node.mChildren[c], t, box);
+}
+
+// The mesh's bounding box as OMPL.app loads it: assimp defaults (up axis converted), node
+// transforms applied.
+Box3 AssimpDefaultBox(const std::string& path) {
+  Assimp::Importer importer;
+  const aiScene* scene = importer.ReadFile(path, aiProcess_Triangulate);
+  EXPECT_NE(scene, nullptr) << importer.GetErrorString();
+  Box3 box;
+  if (scene != nullptr) AddNode(*scene, *scene->mRootNode, aiMatrix4x4(), &box);
+  return box;
+}
+
+Box3 PlacedBox(const Shape& shape, const Eigen::Isometry3d& pose) {
+  Box3 box;
+  for (const Eigen::Vector3d& v : shape.mesh->vertices) box.Add(pose * v);
+  return box;
+}
+
+void ExpectNear(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const std::string& what) {
+  EXPECT_LT((a - b).norm(), 1e-5) << what << ": " << a.transpose() << " vs " << b.transpose();
+}
+
+TEST(OmplCfgTest, PlanarProblemFollowsOmplAppConventions) {
+  const v1::Scene proto = ReadOmplAppProblem(kCfg);
+  EXPECT_EQ(proto.name(), "WallWithGap");
+  ASSERT_EQ(proto.space().components_size(), 1);
+  const v1::Component& c = proto.space().components(0);
+  EXPECT_EQ(c.type(), v1::Component::TYPE_SE2);
+  EXPECT_FALSE(c.has_rotation_weight()) << "OMPL's default SE(2) weight 0.5 applies";
+  EXPECT_EQ(std::vector<double>(c.lower().begin(), c.lower().end()), (std::vector<double>{-5, -5}));
+  EXPECT_EQ(std::vector<double>(c.upper().begin(), c.upper().end()), (std::vector<double>{5, 5}));
+  EXPECT_EQ(std::vector<double>(proto.start().values().begin(), proto.start().values().end()),
+            (std::vector<double>{-3, 2, 0}));
+  EXPECT_NEAR(proto.goal().values(2), M_PI / 2, 1e-12);
+
+  const auto scene = SceneFromProto(proto, kDir, BlobResolver());
+  EXPECT_DOUBLE_EQ(scene->space.Distance(*scene->start, *scene->goal),
+                   std::hypot(6.0, 4.0) + 0.5 * M_PI / 2);
+  // The world is where assimp's default import puts it: the file is Z_UP, its wall lies in the
+  // file's XZ plane and ends up in the XY plane.
+  const Box3 world = PlacedBox(scene->obstacles[0].shape, scene->obstacles[0].pose);
+  const Box3 world_expected = AssimpDefaultBox(kDir + "/wall_env.dae");
+  ExpectNear(world.lo, world_expected.lo, "world lo");
+  ExpectNear(world.hi, world_expected.hi, "world hi");
+  ExpectNear(world.lo, Eigen::Vector3d(-0.25, -5, -0.5), "wall");
+  // The robot (node scale 100 applied) is centred on its vertex centroid in x and y; its
+  // height is its own, as in OMPL.app's 2D problems.
+  const RobotBody& body = scene->robot[0];
+  const Box3 robot = PlacedBox(body.shape, body.offset);
+  const Box3 robot_file = AssimpDefaultBox(kDir + "/box_robot.dae");
+  const Eigen::Vector3d centroid(1.0, 0.45, 0.0);
+  ExpectNear(robot.lo, robot_file.lo - centroid, "robot lo");
+  ExpectNear(robot.hi, robot_file.hi - centroid, "robot hi");
+  ExpectNear(robot.hi - robot.lo, Eigen::Vector3d(0.6, 0.3, 0.2), "robot size");
+}
+
+TEST(OmplCfgTest, ReadSceneFileAcceptsCfg) {
+  const v1::Scene proto = ReadSceneFile(kCfg);
+  EXPECT_EQ(proto.robot(0).shape().mesh().path(), "box_robot.dae");
+}
+
+class TempDir : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("hgraph_ompl_cfg_" + std::string(::testing::UnitTest::GetInstance()
+                                                 ->current_test_info()
+                                                 ->name()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    for (const char* mesh : {"wall_env.dae", "box_robot.dae"}) {
+      fs::copy_file(kDir + "/" + mesh, dir_ / mesh);
+    }
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string Write(const std::string& name, const std::string& text) {
+    std::ofstream(dir_ / name) << text;
+    return (dir_ / name).string();
+  }
+  fs::path dir_;
+};
+
+using OmplCfg3dTest = TempDir;
+
+TEST_F(OmplCfg3dTest, SpatialProblemUsesAngleAxisAndInfersBounds) {
+  const std::string cfg = Write("p.cfg",
+                                "[problem]\nrobot = box_robot.dae\nworld = wall_env.dae\n"
+                                "start.x = -3\nstart.y = 2\nstart.z = 0.1\n"
+                                "start.axis.x = 0\nstart.axis.y = 0\nstart.axis.z = 2\n"
+                                "start.theta = 1.0\n"
+                                "goal.x = 3\ngoal.y = -2\ngoal.z = 0\n"
+                                "goal.axis.x = 1\ngoal.axis.y = 0\ngoal.axis.z = 0\ngoal.theta = 0\n"
+                                "volume.min.x = -5\nvolume.max.x = 5\n");
+  const v1::Scene proto = ReadOmplAppProblem(cfg);
+  EXPECT_EQ(proto.space().components(0).type(), v1::Component::TYPE_SE3);
+  ASSERT_EQ(proto.start().values_size(), 7);
+  EXPECT_NEAR(proto.start().values(5), std::sin(0.5), 1e-12);  // qz
+  EXPECT_NEAR(proto.start().values(6), std::cos(0.5), 1e-12);  // qw
+  // No volume for y and z: the world's box widened by 5% of its size on each side.
+  EXPECT_NEAR(proto.space().components(0).lower(1), -5 - 0.5, 1e-6);
+  EXPECT_NEAR(proto.space().components(0).upper(2), 0.5 + 0.05, 1e-6);
+  // In 3D the whole centroid is the reference point.
+  const auto scene = SceneFromProto(proto, dir_.string(), BlobResolver());
+  const Box3 robot = PlacedBox(scene->robot[0].shape, scene->robot[0].offset);
+  ExpectNear((robot.lo + robot.hi) / 2, Eigen::Vector3d::Zero(), "robot centre");
+}
+
+TEST_F(OmplCfg3dTest, ErrorsNameTheKey) {
+  const std::string missing =
+      Write("m.cfg", "[problem]\nrobot = box_robot.dae\nworld = wall_env.dae\nstart.y = 1\n");
+  try {
+    ReadOmplAppProblem(missing);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), missing + ": [problem].start.x");
+  }
+  const std::string bad = Write(
+      "b.cfg", "[problem]\nrobot = box_robot.dae\nworld = wall_env.dae\nstart.x = one\n");
+  try {
+    ReadOmplAppProblem(bad);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_STREQ(e.what(), (bad + ": [problem].start.x: must be a finite number, got 'one'").c_str());
+  }
+  const std::string no_mesh = Write("n.cfg", "[problem]\nrobot = nope.dae\nworld = wall_env.dae\n");
+  try {
+    ReadOmplAppProblem(no_mesh);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kNotFound);
+    EXPECT_EQ(e.field(), no_mesh + ": [problem].robot");
+  }
+  const std::string no_section = Write("s.cfg", "robot = box_robot.dae\n");
+  EXPECT_THROW(ReadOmplAppProblem(no_section), InputError);
+}
+
+TEST_F(OmplCfg3dTest, RebasedMeshPathsResolveFromTheNewFolder) {
+  v1::Scene proto = ReadOmplAppProblem(kCfg);
+  fs::create_directories(dir_ / "out");
+  RebaseMeshPaths(kDir, (dir_ / "out").string(), &proto);
+  EXPECT_TRUE(fs::exists(dir_ / "out" / proto.robot(0).shape().mesh().path()));
+  EXPECT_TRUE(fs::exists(dir_ / "out" / proto.obstacles(0).shape().mesh().path()));
+}
+
+TEST_F(OmplCfg3dTest, OmplPathFilesReadBack) {
+  // OMPL's .path files hold one configuration per line, x y theta (SE(2)) or x y z qx qy qz qw.
+  const Space se2 = Space::SE2(Eigen::Vector2d(-5, -5), Eigen::Vector2d(5, 5));
+  InputPath path{.name = "p"};
+  path.waypoints = {Eigen::Vector3d(-3, 2, 0), Eigen::Vector3d(0, 0, 0.25),
+                    Eigen::Vector3d(3, -2, 1.5707963267949)};
+  const std::string file = (dir_ / "p.path").string();
+  WritePathsFile(file, {path});
+  const auto read = LoadPathsFile(file, se2);
+  ASSERT_EQ(read.size(), 1u);
+  ASSERT_EQ(read[0].waypoints.size(), 3u);
+  for (size_t i = 0; i < 3; ++i) EXPECT_EQ(read[0].waypoints[i], path.waypoints[i]);
+  const auto plain = ParsePathsText("1 2 0.5\n1.5 2 0.75\n", "x.path", se2);
+  ASSERT_EQ(plain.size(), 1u);
+  EXPECT_EQ(plain[0].waypoints.size(), 2u);
+}
+
+}  // namespace
+}  // namespace hgraph
