@@ -155,7 +155,11 @@ int RunMerge(const MergeFlags& f) {
   }
   if (!f.out_path.empty()) WritePathsFile(f.out_path, {f.shortcut ? shortcut.path : result.path});
   if (!f.svg.empty()) {
-    WriteTextFile(f.svg, RenderSvg(*loaded.scene, MergeRenderRequest(request.paths, result)));
+    RenderRequest picture = MergeRenderRequest(request.paths, result);
+    // The picture shows the path that --out-path gets.
+    if (f.shortcut) picture.merged = RenderPath{.path = shortcut.path, .quality = shortcut.quality};
+    if (f.shortcut) picture.merged->path.name = "merged + shortcut";
+    WriteTextFile(f.svg, RenderSvg(*loaded.scene, picture));
   }
   PrintResult(result);
   if (f.shortcut) PrintShortcutRow(shortcut, result);
