@@ -242,4 +242,62 @@ void RebaseMeshPaths(const std::string& from_dir, const std::string& to_dir, v1:
   for (v1::RobotBody& body : *scene->mutable_robot()) rebase(body.mutable_shape());
 }
 
+bool LooksLikeOmplStatePrint(const std::string& text) {
+  return text.find("State [") != std::string::npos;
+}
+
+std::vector<InputPath> ParseOmplStatePrint(const std::string& text, const std::string& source,
+                                           const Space& space) {
+  InputPath path{.name = fs::path(source).stem().string()};
+  std::istringstream in(text);
+  std::string line;
+  std::vector<double> state;
+  int depth = 0;
+  int line_no = 0;
+  int state_line = 0;
+  auto finish = [&] {
+    if (static_cast<int>(state.size()) != space.dimension()) {
+      throw InputError(source + ":" + std::to_string(state_line),
+                       "state has " + std::to_string(state.size()) + " numbers, the space " +
+                           std::to_string(space.dimension()));
+    }
+    path.waypoints.push_back(Eigen::Map<const Eigen::VectorXd>(state.data(), state.size()));
+    state.clear();
+  };
+  while (std::getline(in, line)) {
+    ++line_no;
+    line = Trim(line);
+    const size_t open = line.find('[');
+    if (open == std::string::npos) {
+      if (line == "]" && depth > 0 && --depth == 0) finish();
+      continue;  // "Geometric path with N states" and the like
+    }
+    if (depth == 0) state_line = line_no;
+    const size_t close = line.rfind(']');
+    if (close == std::string::npos || close < open) {
+      ++depth;  // "Compound state ["
+      continue;
+    }
+    std::istringstream numbers(line.substr(open + 1, close - open - 1));
+    std::string token;
+    while (numbers >> token) {
+      size_t used = 0;
+      double v = 0;
+      try {
+        v = std::stod(token, &used);
+      } catch (const std::exception&) {
+        used = 0;
+      }
+      if (used != token.size() || !std::isfinite(v)) {
+        throw InputError(source + ":" + std::to_string(line_no),
+                         "not a finite number: '" + token + "'");
+      }
+      state.push_back(v);
+    }
+    if (depth == 0) finish();
+  }
+  if (path.waypoints.empty()) throw InputError(source, "no states found");
+  return {path};
+}
+
 }  // namespace hgraph

@@ -17,7 +17,10 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
+#include "core/hgraph/hgraph.h"
+#include "core/space/space.h"
 #include "hgraph/v1/scene.pb.h"
 
 namespace hgraph {
@@ -30,5 +33,15 @@ v1::Scene ReadOmplAppProblem(const std::string& cfg_path);
 // Rewrites every relative mesh path of `scene` from relative-to-`from_dir` to
 // relative-to-`to_dir` (for writing the scene next to another file).
 void RebaseMeshPaths(const std::string& from_dir, const std::string& to_dir, v1::Scene* scene);
+
+// OMPL's state printout (PathGeometric::print), the format of the .path files shipped with
+// OMPL.app: "Compound state [" ... "]" blocks whose lines hold "RealVectorState [x y]",
+// "SO2State [theta]", "SO3State [x y z w]", or one such line per state for a single space. The
+// numbers of a state are taken in order, which is our layout for SE(2) and SE(3). One path named
+// after the file. A state whose count differs from the space's dimension is an InputError
+// naming "source:line". (OMPL's matrix format, one state per line, is ParsePathsText's.)
+bool LooksLikeOmplStatePrint(const std::string& text);
+std::vector<InputPath> ParseOmplStatePrint(const std::string& text, const std::string& source,
+                                           const Space& space);
 
 }  // namespace hgraph

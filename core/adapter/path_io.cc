@@ -6,6 +6,7 @@
 #include <string_view>
 
 #include "core/adapter/json_io.h"
+#include "core/adapter/ompl_cfg.h"
 #include "core/adapter/scene_proto.h"
 #include "core/common/error.h"
 
@@ -145,6 +146,7 @@ std::vector<InputPath> LoadPathsFile(const std::string& path, const Space& space
     ParseJson(text, path, &proto);
     return PathsFromProto(proto);
   }
+  if (LooksLikeOmplStatePrint(text)) return ParseOmplStatePrint(text, path, space);
   return ParsePathsText(text, path, space);
 }
 

@@ -18,6 +18,7 @@ v1::PathSet PathsToProto(const std::vector<InputPath>& paths);
 
 // Reads a paths file in either format, told apart by the first non-space character:
 //  '{'   a proto3 JSON PathSet;
+//  'State [' anywhere: OMPL's state printout, as in OMPL.app's .path files (ompl_cfg.h);
 //  else  OMPL's matrix format (PathGeometric::printAsMatrix): one configuration per line as
 //        whitespace-separated numbers, blank lines between paths, '#' starting a comment. A
 //        comment line directly above a path's first waypoint names the path.

@@ -204,5 +204,33 @@ TEST_F(OmplCfg3dTest, OmplPathFilesReadBack) {
   EXPECT_EQ(plain[0].waypoints.size(), 2u);
 }
 
+TEST_F(OmplCfg3dTest, OmplStatePrintReads) {
+  // The format of OMPL.app's shipped .path files (PathGeometric::print).
+  const std::string se2_text =
+      "Geometric path with 2 states\nCompound state [\nRealVectorState [0.01 -0.15]\n"
+      "SO2State [0]\n]\nCompound state [\nRealVectorState [41.01 -0.15]\n"
+      "SO2State [0.802851]\n]\n";
+  const std::string file = Write("maze.path", se2_text);
+  const Space se2 = Space::SE2(Eigen::Vector2d(-55, -55), Eigen::Vector2d(55, 55));
+  const auto paths = LoadPathsFile(file, se2);
+  ASSERT_EQ(paths.size(), 1u);
+  EXPECT_EQ(paths[0].name, "maze");
+  ASSERT_EQ(paths[0].waypoints.size(), 2u);
+  EXPECT_EQ(paths[0].waypoints[1], Eigen::Vector3d(41.01, -0.15, 0.802851));
+
+  const Space se3 = Space::SE3(Eigen::Vector3d::Constant(-9), Eigen::Vector3d::Constant(9));
+  const auto spatial = ParseOmplStatePrint(
+      "Compound state [\nRealVectorState [1 2 3]\nSO3State [0 0 0 1]\n]\n", "s.path", se3);
+  ASSERT_EQ(spatial[0].waypoints.size(), 1u);
+  EXPECT_EQ(spatial[0].waypoints[0].size(), 7);
+  EXPECT_EQ(spatial[0].waypoints[0][6], 1.0);
+  try {
+    LoadPathsFile(file, se3);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), file + ":2");
+  }
+}
+
 }  // namespace
 }  // namespace hgraph
