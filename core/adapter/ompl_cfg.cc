@@ -92,7 +92,8 @@ class ProblemSection {
 // the rotation is put back here as a pose. The matrices are assimp's ColladaLoader ones.
 Eigen::Matrix3d AssimpUpAxisRotation(const std::string& mesh_path) {
   std::string ext = fs::path(mesh_path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
   if (ext != ".dae") return Eigen::Matrix3d::Identity();
   const std::string text = ReadTextFile(mesh_path);
   const size_t open = text.find("<up_axis>");

@@ -32,12 +32,9 @@ constexpr int kCircleSegments = 32;  // a cylinder's end discs, before the conve
 
 Vec2 Project(const Vec3& p, Plane plane) {
   switch (plane) {
-    case Plane::kXY:
-      return {p.x(), p.y()};
-    case Plane::kXZ:
-      return {p.x(), p.z()};
-    case Plane::kYZ:
-      return {p.y(), p.z()};
+    case Plane::kXY: return {p.x(), p.y()};
+    case Plane::kXZ: return {p.x(), p.z()};
+    case Plane::kYZ: return {p.y(), p.z()};
   }
   return {p.x(), p.y()};
 }
@@ -132,8 +129,7 @@ std::vector<Vec3> PrimitiveVertices(const Shape& shape) {
       }
       break;
     case ShapeType::kSphere:
-    case ShapeType::kMesh:
-      break;
+    case ShapeType::kMesh: break;
   }
   return v;
 }
@@ -178,12 +174,9 @@ std::string ShapePathData(const Shape& shape, const Eigen::Isometry3d& pose, Pla
 // Largest distance from a shape's origin to its surface.
 double ShapeRadius(const Shape& shape) {
   switch (shape.type) {
-    case ShapeType::kBox:
-      return shape.box_size.norm() / 2;
-    case ShapeType::kSphere:
-      return shape.radius;
-    case ShapeType::kCylinder:
-      return std::hypot(shape.radius, shape.length / 2);
+    case ShapeType::kBox: return shape.box_size.norm() / 2;
+    case ShapeType::kSphere: return shape.radius;
+    case ShapeType::kCylinder: return std::hypot(shape.radius, shape.length / 2);
     case ShapeType::kMesh: {
       double r = 0;
       if (shape.mesh != nullptr) {
@@ -244,8 +237,7 @@ std::vector<Config> SamplesAlong(const Space& space, const InputPath& path, int 
     while (segment + 2 < at.size() && at[segment + 1] < s) ++segment;
     const double span = at[segment + 1] - at[segment];
     const double t = span > 0 ? std::clamp((s - at[segment]) / span, 0.0, 1.0) : 0.0;
-    samples.push_back(
-        space.Interpolate(path.waypoints[segment], path.waypoints[segment + 1], t));
+    samples.push_back(space.Interpolate(path.waypoints[segment], path.waypoints[segment + 1], t));
   }
   return samples;
 }
@@ -283,7 +275,8 @@ class SvgWriter {
     WriteEndpoints();
     out_ += "</g>\n";
     out_ += "<rect x=\"" + Num(kPadPx) + "\" y=\"" + Num(kPadPx) + "\" width=\"" + Num(plot_w_) +
-            "\" height=\"" + Num(plot_h_) + "\" fill=\"none\" stroke=\"#222\" stroke-width=\"1\"/>\n";
+            "\" height=\"" + Num(plot_h_) +
+            "\" fill=\"none\" stroke=\"#222\" stroke-width=\"1\"/>\n";
     WriteLegend(legend_top);
     out_ += "</svg>\n";
     return out_;
@@ -348,8 +341,8 @@ class SvgWriter {
       const Vec2 b = view_.ToPx(Project(box_hi, request_.plane));
       const Vec2 lo = a.cwiseMin(b);
       const Vec2 size = (a - b).cwiseAbs();
-      out_ += "<rect x=\"" + Num(lo.x()) + "\" y=\"" + Num(lo.y()) + "\" width=\"" +
-              Num(size.x()) + "\" height=\"" + Num(size.y()) +
+      out_ += "<rect x=\"" + Num(lo.x()) + "\" y=\"" + Num(lo.y()) + "\" width=\"" + Num(size.x()) +
+              "\" height=\"" + Num(size.y()) +
               "\" fill=\"none\" stroke=\"#bbbbbb\" stroke-width=\"1\" stroke-dasharray=\"4 3\"/>\n";
     }
   }
@@ -398,8 +391,8 @@ class SvgWriter {
       if (d.empty()) continue;
       drew_robot_ = true;
       const bool outline = body.shape.type != ShapeType::kMesh;
-      out_ += "<path d=\"" + d + "\" fill=\"" + kRobotColour + "\" fill-opacity=\"" +
-              Num(opacity) + "\"" +
+      out_ += "<path d=\"" + d + "\" fill=\"" + kRobotColour + "\" fill-opacity=\"" + Num(opacity) +
+              "\"" +
               (outline ? std::string(" stroke=\"") + kRobotColour + "\" stroke-width=\"1\""
                        : std::string()) +
               "/>\n";
@@ -431,12 +424,14 @@ class SvgWriter {
     }
     for (int c : components_) {
       if (start) {
-        const Vec2 p = view_.ToPx(Project(scene_.space.Pose(c, *start).translation(), request_.plane));
+        const Vec2 p =
+            view_.ToPx(Project(scene_.space.Pose(c, *start).translation(), request_.plane));
         out_ += "<circle cx=\"" + Num(p.x()) + "\" cy=\"" + Num(p.y()) + "\" r=\"6\" fill=\"" +
                 kStartColour + "\" stroke=\"white\" stroke-width=\"1.5\"/>\n";
       }
       if (goal) {
-        const Vec2 p = view_.ToPx(Project(scene_.space.Pose(c, *goal).translation(), request_.plane));
+        const Vec2 p =
+            view_.ToPx(Project(scene_.space.Pose(c, *goal).translation(), request_.plane));
         out_ += "<rect x=\"" + Num(p.x() - 6) + "\" y=\"" + Num(p.y() - 6) +
                 "\" width=\"12\" height=\"12\" fill=\"" + kGoalColour +
                 "\" stroke=\"white\" stroke-width=\"1.5\"/>\n";
@@ -454,11 +449,10 @@ class SvgWriter {
     out_ += "<line x1=\"" + Num(kPadPx) + "\" y1=\"" + Num(y - 4) + "\" x2=\"" + Num(kPadPx + 28) +
             "\" y2=\"" + Num(y - 4) + "\" stroke=\"" + colour + "\" stroke-width=\"" + Num(width) +
             "\" stroke-linecap=\"round\"/>\n";
-    const double length =
-        path.quality ? path.quality->length : PathLength(scene_.space, path.path);
-    const double clearance =
-        path.quality && path.quality->has_clearance ? path.quality->min_clearance
-                                                    : std::numeric_limits<double>::quiet_NaN();
+    const double length = path.quality ? path.quality->length : PathLength(scene_.space, path.path);
+    const double clearance = path.quality && path.quality->has_clearance
+                                 ? path.quality->min_clearance
+                                 : std::numeric_limits<double>::quiet_NaN();
     LegendText(kPadPx + 36, y, path.path.name);
     LegendText(kPadPx + 250, y, "length " + Quantity(length));
     LegendText(kPadPx + 420, y, "min clearance " + Quantity(clearance));
@@ -513,12 +507,9 @@ Plane ParsePlane(const std::string& name, const std::string& field) {
 
 const char* PlaneName(Plane plane) {
   switch (plane) {
-    case Plane::kXY:
-      return "xy";
-    case Plane::kXZ:
-      return "xz";
-    case Plane::kYZ:
-      return "yz";
+    case Plane::kXY: return "xy";
+    case Plane::kXZ: return "xz";
+    case Plane::kYZ: return "yz";
   }
   return "xy";
 }

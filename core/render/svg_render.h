@@ -32,7 +32,7 @@ struct RenderPath {
 };
 
 struct RenderRequest {
-  std::vector<RenderPath> inputs;  // drawn thin and grey
+  std::vector<RenderPath> inputs;    // drawn thin and grey
   std::optional<RenderPath> merged;  // drawn bold, with the robot's footprints along it
   Plane plane = Plane::kXY;
   int width_px = 900;  // the picture's width; its height follows the bounds' aspect ratio

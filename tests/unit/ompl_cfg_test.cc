@@ -2,11 +2,11 @@
 // import (what OMPL.app itself sees) on the problem in tests/data/ompl_app.
 #include "core/adapter/ompl_cfg.h"
 
-#include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <gtest/gtest.h>
 
+#include <assimp/Importer.hpp>
 #include <filesystem>
 #include <fstream>
 
@@ -108,9 +108,8 @@ class TempDir : public ::testing::Test {
  protected:
   void SetUp() override {
     dir_ = fs::temp_directory_path() /
-           ("hgraph_ompl_cfg_" + std::string(::testing::UnitTest::GetInstance()
-                                                 ->current_test_info()
-                                                 ->name()));
+           ("hgraph_ompl_cfg_" +
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
     for (const char* mesh : {"wall_env.dae", "box_robot.dae"}) {
@@ -128,14 +127,15 @@ class TempDir : public ::testing::Test {
 using OmplCfg3dTest = TempDir;
 
 TEST_F(OmplCfg3dTest, SpatialProblemUsesAngleAxisAndInfersBounds) {
-  const std::string cfg = Write("p.cfg",
-                                "[problem]\nrobot = box_robot.dae\nworld = wall_env.dae\n"
-                                "start.x = -3\nstart.y = 2\nstart.z = 0.1\n"
-                                "start.axis.x = 0\nstart.axis.y = 0\nstart.axis.z = 2\n"
-                                "start.theta = 1.0\n"
-                                "goal.x = 3\ngoal.y = -2\ngoal.z = 0\n"
-                                "goal.axis.x = 1\ngoal.axis.y = 0\ngoal.axis.z = 0\ngoal.theta = 0\n"
-                                "volume.min.x = -5\nvolume.max.x = 5\n");
+  const std::string cfg =
+      Write("p.cfg",
+            "[problem]\nrobot = box_robot.dae\nworld = wall_env.dae\n"
+            "start.x = -3\nstart.y = 2\nstart.z = 0.1\n"
+            "start.axis.x = 0\nstart.axis.y = 0\nstart.axis.z = 2\n"
+            "start.theta = 1.0\n"
+            "goal.x = 3\ngoal.y = -2\ngoal.z = 0\n"
+            "goal.axis.x = 1\ngoal.axis.y = 0\ngoal.axis.z = 0\ngoal.theta = 0\n"
+            "volume.min.x = -5\nvolume.max.x = 5\n");
   const v1::Scene proto = ReadOmplAppProblem(cfg);
   EXPECT_EQ(proto.space().components(0).type(), v1::Component::TYPE_SE3);
   ASSERT_EQ(proto.start().values_size(), 7);
@@ -159,13 +159,14 @@ TEST_F(OmplCfg3dTest, ErrorsNameTheKey) {
   } catch (const InputError& e) {
     EXPECT_EQ(e.field(), missing + ": [problem].start.x");
   }
-  const std::string bad = Write(
-      "b.cfg", "[problem]\nrobot = box_robot.dae\nworld = wall_env.dae\nstart.x = one\n");
+  const std::string bad =
+      Write("b.cfg", "[problem]\nrobot = box_robot.dae\nworld = wall_env.dae\nstart.x = one\n");
   try {
     ReadOmplAppProblem(bad);
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_STREQ(e.what(), (bad + ": [problem].start.x: must be a finite number, got 'one'").c_str());
+    EXPECT_STREQ(e.what(),
+                 (bad + ": [problem].start.x: must be a finite number, got 'one'").c_str());
   }
   const std::string no_mesh = Write("n.cfg", "[problem]\nrobot = nope.dae\nworld = wall_env.dae\n");
   try {

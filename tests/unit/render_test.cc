@@ -1,7 +1,5 @@
 // SVG pictures: structure of the document, what is drawn for which robot, and the errors. That
 // librsvg renders the pictures is checked end to end in tests/integration/picture_test.py.
-#include "core/render/svg_render.h"
-
 #include <gtest/gtest.h>
 
 #include <string>
@@ -9,6 +7,7 @@
 #include "core/collision/collision_world.h"
 #include "core/common/error.h"
 #include "core/motion/local_planner.h"
+#include "core/render/svg_render.h"
 #include "tests/unit/test_scenes.h"
 
 namespace hgraph {
@@ -31,7 +30,8 @@ Scene BarScene() {
     scene.obstacles.push_back(wall);
   }
   scene.robot.push_back(RobotBody{
-      .name = "bar", .shape = Shape{.type = ShapeType::kBox, .box_size = Eigen::Vector3d(1.5, 0.3, 0.3)}});
+      .name = "bar",
+      .shape = Shape{.type = ShapeType::kBox, .box_size = Eigen::Vector3d(1.5, 0.3, 0.3)}});
   return scene;
 }
 
@@ -67,9 +67,8 @@ TEST(RenderTest, MergeOfCirclesHasEveryLayer) {
 TEST(RenderTest, RotatingRobotIsDrawnAlongTheMergedPath) {
   const Scene scene = BarScene();
   const InputPath input = Path("in", {{5, 2, 0}, {5, 8, 1.5}});
-  RenderRequest request{.inputs = {RenderPath{.path = input}},
-                        .merged = RenderPath{.path = input},
-                        .footprints = 7};
+  RenderRequest request{
+      .inputs = {RenderPath{.path = input}}, .merged = RenderPath{.path = input}, .footprints = 7};
   const std::string svg = RenderSvg(scene, request);
   // One more for the legend's swatch.
   EXPECT_EQ(Count(svg, "fill=\"#1f77b4\" fill-opacity"), 7 + 1);
@@ -101,12 +100,16 @@ TEST(RenderTest, MeshTrianglesAreTurnedToOneWinding) {
   auto mesh = std::make_shared<Mesh>();
   for (int i = 0; i < 8; ++i) mesh->vertices.emplace_back(i & 1, (i >> 1) & 1, (i >> 2) & 1);
   mesh->triangles = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}};  // bottom (down), top (up)
-  Scene scene{.name = "cube", .space = Space::RealVector(Eigen::Vector2d(0, 0), Eigen::Vector2d(4, 4))};
+  Scene scene{.name = "cube",
+              .space = Space::RealVector(Eigen::Vector2d(0, 0), Eigen::Vector2d(4, 4))};
   scene.obstacles.push_back(Obstacle{.shape = Shape{.type = ShapeType::kMesh, .mesh = mesh}});
   scene.robot.push_back(RobotBody{.shape = Shape{.type = ShapeType::kSphere, .radius = 0}});
-  const std::string svg = RenderSvg(scene, RenderRequest{.inputs = {RenderPath{
-                                                             .path = InputPath{.name = "p",
-                                                                               .waypoints = {Eigen::Vector2d(3, 3), Eigen::Vector2d(3.5, 3.5)}}}}});
+  const std::string svg = RenderSvg(
+      scene,
+      RenderRequest{
+          .inputs = {RenderPath{
+              .path = InputPath{
+                  .name = "p", .waypoints = {Eigen::Vector2d(3, 3), Eigen::Vector2d(3.5, 3.5)}}}}});
   const size_t at = svg.find("<path d=\"");
   ASSERT_NE(at, std::string::npos);
   const std::string d = svg.substr(at + 9, svg.find('"', at + 9) - at - 9);
@@ -135,7 +138,8 @@ TEST(RenderTest, PlanesProjectTheRightAxes) {
   }
   // A 3D scene seen from the side still renders (a 2D view of the z range).
   Scene scene{.name = "s", .space = Space::SE3(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(4, 4, 2))};
-  scene.robot.push_back(RobotBody{.shape = Shape{.type = ShapeType::kCylinder, .radius = 0.2, .length = 1}});
+  scene.robot.push_back(
+      RobotBody{.shape = Shape{.type = ShapeType::kCylinder, .radius = 0.2, .length = 1}});
   Eigen::VectorXd a(7), b(7);
   a << 1, 1, 1, 0, 0, 0, 1;
   b << 3, 3, 1.5, 0, 0.7071067811865476, 0, 0.7071067811865476;
