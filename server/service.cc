@@ -102,8 +102,7 @@ void CheckBatchLimits(const v1::PathSet& paths, const ServerOptions& options) {
   }
   for (int i = 0; i < paths.paths_size(); ++i) {
     if (paths.paths(i).waypoints_size() > options.max_waypoints) {
-      throw Error(ErrorCode::kResourceExhausted,
-                  "paths.paths[" + std::to_string(i) + "].waypoints",
+      throw Error(ErrorCode::kResourceExhausted, "paths.paths[" + std::to_string(i) + "].waypoints",
                   std::to_string(paths.paths(i).waypoints_size()) +
                       " waypoints exceed the limit of " + std::to_string(options.max_waypoints) +
                       " per path (--max-waypoints)");
@@ -138,9 +137,12 @@ class PathMergerService::UnaryCall final : public grpc::ServerUnaryReactor {
       Complete(Invoke([&] { body(token_); }, token_));
       return;
     }
-    const bool admitted = service_->pool().TrySubmit([this, body = std::move(body)] {
-      Complete(Invoke([&] { body(token_); }, token_));
-    });
+    const bool admitted =
+        service_->pool().TrySubmit([this, body = std::move(body)](WorkerPool::Slot& slot) {
+          const grpc::Status status = Invoke([&] { body(token_); }, token_);
+          slot.Release();
+          Complete(status);
+        });
     if (!admitted) Complete(Busy(service_->pool()));
   }
 
@@ -162,8 +164,7 @@ class PathMergerService::UnaryCall final : public grpc::ServerUnaryReactor {
 
 // UploadBlob: collects the chunks on gRPC threads (copies only), then verifies the size and
 // SHA-256 on the worker pool.
-class PathMergerService::UploadCall final
-    : public grpc::ServerReadReactor<v1::UploadBlobRequest> {
+class PathMergerService::UploadCall final : public grpc::ServerReadReactor<v1::UploadBlobRequest> {
  public:
   UploadCall(PathMergerService* service, v1::UploadBlobResponse* response)
       : service_(service), response_(response) {
@@ -181,11 +182,11 @@ class PathMergerService::UploadCall final
       grpc::Status status = Invoke([&] { ValidateDigest(digest_, "digest"); }, token_);
       if (!status.ok()) return Complete(status);
       if (digest_.size_bytes() > service_->options().max_blob_bytes) {
-        return Complete(grpc::Status(
-            grpc::StatusCode::RESOURCE_EXHAUSTED,
-            "digest.size_bytes: " + std::to_string(digest_.size_bytes()) +
-                " bytes exceed the limit of " +
-                std::to_string(service_->options().max_blob_bytes) + " (--max-blob-bytes)"));
+        return Complete(grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                                     "digest.size_bytes: " + std::to_string(digest_.size_bytes()) +
+                                         " bytes exceed the limit of " +
+                                         std::to_string(service_->options().max_blob_bytes) +
+                                         " (--max-blob-bytes)"));
       }
       bytes_.reserve(static_cast<size_t>(digest_.size_bytes()));
     }
@@ -204,16 +205,18 @@ class PathMergerService::UploadCall final
  private:
   void EndOfStream() {
     if (first_) {
-      return Complete(grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
-                                   "digest: the stream held no message"));
+      return Complete(
+          grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, "digest: the stream held no message"));
     }
-    const bool admitted = service_->pool().TrySubmit([this] {
-      Complete(Invoke(
+    const bool admitted = service_->pool().TrySubmit([this](WorkerPool::Slot& slot) {
+      const grpc::Status status = Invoke(
           [&] {
             response_->set_stored(service_->scenes_.PutBlob(digest_, std::move(bytes_)));
             *response_->mutable_digest() = digest_;
           },
-          token_));
+          token_);
+      slot.Release();
+      Complete(status);
     });
     if (!admitted) Complete(Busy(service_->pool()));
   }
@@ -235,8 +238,7 @@ class PathMergerService::UploadCall final
 
 // MergePaths: progress events at a bounded rate with at most one write in flight (a newer
 // report replaces an unsent one rather than queueing), then the result.
-class PathMergerService::MergeCall final
-    : public grpc::ServerWriteReactor<v1::MergePathsResponse> {
+class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::MergePathsResponse> {
  public:
   MergeCall(PathMergerService* service, grpc::CallbackServerContext* context,
             const v1::MergePathsRequest* request)
@@ -246,7 +248,8 @@ class PathMergerService::MergeCall final
                              ? request->progress_interval_ms()
                              : service->options().progress_interval_ms;
     interval_ = std::chrono::milliseconds(interval);
-    const bool admitted = service_->pool().TrySubmit([this] { Work(); });
+    const bool admitted =
+        service_->pool().TrySubmit([this](WorkerPool::Slot& slot) { Work(slot); });
     if (!admitted) Complete(Busy(service_->pool()), false);
   }
 
@@ -266,10 +269,11 @@ class PathMergerService::MergeCall final
   void OnDone() override { delete this; }
 
  private:
-  void Work() {
+  void Work(WorkerPool::Slot& slot) {
     v1::MergePathsResponse final_message;
     const grpc::Status status = Invoke([&] { Merge(&final_message); }, token_);
     if (status.ok()) final_ = std::move(final_message);
+    slot.Release();
     Complete(status, status.ok());
   }
 
@@ -294,8 +298,8 @@ class PathMergerService::MergeCall final
 
     auto stored = std::make_shared<StoredHGraph>();
     stored->scene = scene;
-    stored->planner = std::make_unique<LocalPlanner>(
-        scene.world, LocalPlannerOptions{.resolution = resolution});
+    stored->planner =
+        std::make_unique<LocalPlanner>(scene.world, LocalPlannerOptions{.resolution = resolution});
     stored->session = std::make_unique<HybridizationSession>(*stored->planner, merge);
     const MergeResult result = stored->session->Query(merge.measure, merge.progress, token_);
     *out->mutable_result() = MergeResultToProto(result);
@@ -384,10 +388,9 @@ PathMergerService::PathMergerService(const ServerOptions& options, Metrics& metr
   metrics_.DeclareCounter("grpc_server_started_total", "RPCs started on the server.");
   metrics_.DeclareCounter("grpc_server_handled_total",
                           "RPCs completed on the server, regardless of success or failure.");
-  metrics_.DeclareHistogram("grpc_server_handling_seconds",
-                            "Response latency of RPCs handled by the server, in seconds.",
-                            {0.001, 0.005, 0.01, 0.025, 0.05, 0.1, 0.25, 0.5, 1, 2.5, 5, 10, 30,
-                             60, 300});
+  metrics_.DeclareHistogram(
+      "grpc_server_handling_seconds", "Response latency of RPCs handled by the server, in seconds.",
+      {0.001, 0.005, 0.01, 0.025, 0.05, 0.1, 0.25, 0.5, 1, 2.5, 5, 10, 30, 60, 300});
   metrics_.DeclareCounter("hgraph_merges_total", "Merges and re-queries that returned a result.");
   metrics_.DeclareCounter("hgraph_merge_collision_checks_total",
                           "Collision checks run by merges and re-queries.");
@@ -435,8 +438,8 @@ void PathMergerService::RecordCall(const std::string& method, const std::string&
   const double seconds = std::chrono::duration<double>(Clock::now() - started).count();
   const char* code = CodeName(status.error_code());
   const std::string type = method == "MergePaths" || method == "PlanPaths" ? "server_stream"
-                           : method == "UploadBlob"                       ? "client_stream"
-                                                                          : "unary";
+                           : method == "UploadBlob"                        ? "client_stream"
+                                                                           : "unary";
   metrics_.Increment("grpc_server_started_total",
                      {{"grpc_type", type}, {"grpc_service", kService}, {"grpc_method", method}});
   metrics_.Increment("grpc_server_handled_total", {{"grpc_type", type},
@@ -469,7 +472,7 @@ void PathMergerService::RecordMerge(const std::string& method, const v1::MergeRe
                      static_cast<double>(stats.edges_reused()));
   const v1::Timing& t = result.timing();
   const std::pair<const char*, double> phases[] = {
-      {"validate", t.validate_ms()}, {"inputs", t.inputs_ms()},     {"align", t.align_ms()},
+      {"validate", t.validate_ms()},     {"inputs", t.inputs_ms()}, {"align", t.align_ms()},
       {"candidates", t.candidates_ms()}, {"check", t.check_ms()},   {"search", t.search_ms()},
       {"evaluate", t.evaluate_ms()}};
   for (const auto& [phase, ms] : phases) {
@@ -483,8 +486,7 @@ void PathMergerService::DropHGraphs(const std::vector<std::string>& names) {
 }
 
 void PathMergerService::ExpireIdleSessions() {
-  const std::vector<std::string> dropped =
-      sessions_.ExpireIdle(SessionRegistry::Clock::now());
+  const std::vector<std::string> dropped = sessions_.ExpireIdle(SessionRegistry::Clock::now());
   if (!dropped.empty()) spdlog::info("expired sessions dropped {} H-Graphs", dropped.size());
   DropHGraphs(dropped);
 }
@@ -522,9 +524,9 @@ grpc::ServerUnaryReactor* PathMergerService::PutScene(grpc::CallbackServerContex
   return call;
 }
 
-grpc::ServerUnaryReactor* PathMergerService::CreateSession(
-    grpc::CallbackServerContext* context, const v1::CreateSessionRequest* request,
-    v1::Session* response) {
+grpc::ServerUnaryReactor* PathMergerService::CreateSession(grpc::CallbackServerContext* context,
+                                                           const v1::CreateSessionRequest* request,
+                                                           v1::Session* response) {
   auto* call = new UnaryCall(this, context, "CreateSession", "");
   call->Run(
       [=, this](const CancelToken&) {
@@ -558,12 +560,13 @@ grpc::ServerUnaryReactor* PathMergerService::ListSessions(grpc::CallbackServerCo
   return call;
 }
 
-grpc::ServerUnaryReactor* PathMergerService::DeleteSession(
-    grpc::CallbackServerContext* context, const v1::DeleteSessionRequest* request,
-    v1::DeleteSessionResponse*) {
+grpc::ServerUnaryReactor* PathMergerService::DeleteSession(grpc::CallbackServerContext* context,
+                                                           const v1::DeleteSessionRequest* request,
+                                                           v1::DeleteSessionResponse*) {
   auto* call = new UnaryCall(this, context, "DeleteSession", request->name());
-  call->Run([=, this](const CancelToken&) { DropHGraphs(sessions_.Delete(request->name(), "name")); },
-            /*on_worker=*/false);
+  call->Run(
+      [=, this](const CancelToken&) { DropHGraphs(sessions_.Delete(request->name(), "name")); },
+      /*on_worker=*/false);
   return call;
 }
 
@@ -607,7 +610,9 @@ class PathMergerService::PlanCall final : public grpc::ServerWriteReactor<v1::Pl
            const v1::PlanPathsRequest* request)
       : service_(service), request_(request) {
     WireDeadline(context, token_);
-    if (!service_->pool().TrySubmit([this] { Work(); })) Complete(Busy(service_->pool()));
+    if (!service_->pool().TrySubmit([this](WorkerPool::Slot& slot) { Work(slot); })) {
+      Complete(Busy(service_->pool()));
+    }
   }
 
   void OnWriteDone(bool ok) override {
@@ -618,8 +623,10 @@ class PathMergerService::PlanCall final : public grpc::ServerWriteReactor<v1::Pl
   void OnDone() override { delete this; }
 
  private:
-  void Work() {
-    Complete(Invoke([&] { Plan(); }, token_));
+  void Work(WorkerPool::Slot& slot) {
+    const grpc::Status status = Invoke([&] { Plan(); }, token_);
+    slot.Release();
+    Complete(status);
   }
 
   void Plan() {
@@ -632,14 +639,14 @@ class PathMergerService::PlanCall final : public grpc::ServerWriteReactor<v1::Pl
     }
     LoadedScene scene = service_->scenes_.Get(session.scene(), "session");
     const Scene& model = scene.world->scene();
-    PlanRequest plan{
-        .planner = request.planner().empty() ? PlannerType::kRRTConnect
-                                             : ParsePlannerType(request.planner(), "planner"),
-        .count = request.count() == 0 ? 1 : request.count(),
-        .time_s = request.time_per_path_s() > 0 ? request.time_per_path_s() : 1.0,
-        .seed = request.seed(),
-        .simplify = request.simplify(),
-        .resolution = SceneResolution(*scene.proto)};
+    PlanRequest plan{.planner = request.planner().empty()
+                                    ? PlannerType::kRRTConnect
+                                    : ParsePlannerType(request.planner(), "planner"),
+                     .count = request.count() == 0 ? 1 : request.count(),
+                     .time_s = request.time_per_path_s() > 0 ? request.time_per_path_s() : 1.0,
+                     .seed = request.seed(),
+                     .simplify = request.simplify(),
+                     .resolution = SceneResolution(*scene.proto)};
     if (request.has_start()) {
       plan.start = ConfigFromProto(request.start());
     } else if (model.start) {

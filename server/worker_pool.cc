@@ -17,14 +17,23 @@ WorkerPool::WorkerPool(int threads, int max_admitted)
 
 WorkerPool::~WorkerPool() { WaitIdle(); }
 
-bool WorkerPool::TrySubmit(std::function<void()> job) {
+void WorkerPool::Slot::Release() {
+  if (released_) return;
+  released_ = true;
+  pool_->admitted_.fetch_sub(1);
+}
+
+bool WorkerPool::TrySubmit(std::function<void(Slot&)> job) {
   int current = admitted_.load();
   do {
     if (current >= max_admitted_) return false;
   } while (!admitted_.compare_exchange_weak(current, current + 1));
+  running_.fetch_add(1);
   arena_.enqueue([this, job = std::move(job)] {
-    job();
-    if (admitted_.fetch_sub(1) == 1) {
+    Slot slot(this);
+    job(slot);
+    slot.Release();
+    if (running_.fetch_sub(1) == 1) {
       std::lock_guard lock(mutex_);
       idle_.notify_all();
     }
@@ -34,7 +43,7 @@ bool WorkerPool::TrySubmit(std::function<void()> job) {
 
 void WorkerPool::WaitIdle() {
   std::unique_lock lock(mutex_);
-  idle_.wait(lock, [this] { return admitted_.load() == 0; });
+  idle_.wait(lock, [this] { return running_.load() == 0; });
 }
 
 }  // namespace hgraph::server

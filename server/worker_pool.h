@@ -23,10 +23,25 @@ class WorkerPool {
   WorkerPool(const WorkerPool&) = delete;
   WorkerPool& operator=(const WorkerPool&) = delete;
 
+  // A job's hold on its admission slot. The job calls Release() (idempotent) just before it
+  // sends its call's final message: a client that starts its next call the moment it has an
+  // answer must find the slot free, not still held by the job's last few instructions. The pool
+  // releases the slot after the job returns in any case.
+  class Slot {
+   public:
+    void Release();
+
+   private:
+    friend class WorkerPool;
+    explicit Slot(WorkerPool* pool) : pool_(pool) {}
+    WorkerPool* pool_;
+    bool released_ = false;
+  };
+
   // Queues the job, or returns false without running it when the admission queue is full (the
   // caller answers RESOURCE_EXHAUSTED). The job must not throw.
-  bool TrySubmit(std::function<void()> job);
-  // Blocks until every admitted job has finished.
+  bool TrySubmit(std::function<void(Slot&)> job);
+  // Blocks until every admitted job has returned.
   void WaitIdle();
 
   int threads() const { return threads_; }
@@ -40,7 +55,8 @@ class WorkerPool {
   // global limit is threads + 1: TBB counts one slot for an external thread.
   tbb::global_control parallelism_;
   tbb::task_arena arena_;
-  std::atomic<int> admitted_{0};
+  std::atomic<int> admitted_{0};  // jobs holding an admission slot
+  std::atomic<int> running_{0};   // jobs queued or running, whether or not they hold a slot
   std::mutex mutex_;
   std::condition_variable idle_;
 };

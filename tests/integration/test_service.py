@@ -323,6 +323,21 @@ def test_admission_queue_full_is_resource_exhausted():
         assert s.stop() == 0, "".join(s.log)
 
 
+def test_sequential_calls_with_one_admission_slot_are_never_busy():
+    # A call's slot is free by the time its answer arrives: a client that waits for each answer
+    # before its next call never meets RESOURCE_EXHAUSTED, however small --max-pending is.
+    s = Server("--threads", "1", "--max-pending", "1")
+    try:
+        with s.client() as c:
+            digest = c.upload_scene(DATA / "scene.json")
+            for _ in range(25):
+                c.create_session(digest)
+                result = c.merge(input_paths(), variant="edit-distance")
+                assert c.requery(result.hgraph, "length").stats.collision_checks == 0
+    finally:
+        assert s.stop() == 0, "".join(s.log)
+
+
 def test_eviction_under_a_small_budget_gives_not_found(server):
     budget = 300_000
     s = Server("--cache-bytes", str(budget))
