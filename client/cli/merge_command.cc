@@ -34,6 +34,7 @@ struct MergeFlags {
   double safety = 0;
   double resolution = 0;
   double endpoint_tolerance = 0;
+  double max_node_spacing = 0;
   int threads = 0;
   bool quiet = false;
   bool shortcut = false;
@@ -46,6 +47,7 @@ struct MergeFlags {
   CLI::Option* k_opt = nullptr;
   CLI::Option* resolution_opt = nullptr;
   CLI::Option* endpoint_tolerance_opt = nullptr;
+  CLI::Option* max_node_spacing_opt = nullptr;
 };
 
 // The proto fields each flag fills, so that errors name the flag as well.
@@ -60,6 +62,7 @@ const std::map<std::string, std::string>& FlagNames() {
       {"options.resolution", "--resolution"},
       {"options.threads", "--threads"},
       {"options.endpoint_tolerance", "--endpoint-tolerance"},
+      {"options.max_node_spacing", "--max-node-spacing"},
   };
   return names;
 }
@@ -78,6 +81,7 @@ void BuildProtos(const MergeFlags& f, v1::Measure* measure, v1::MergeOptions* op
   if (f.gap_extend_opt->count() > 0) options->set_gap_extend(f.gap_extend);
   if (f.resolution_opt->count() > 0) options->set_resolution(f.resolution);
   if (f.endpoint_tolerance_opt->count() > 0) options->set_endpoint_tolerance(f.endpoint_tolerance);
+  if (f.max_node_spacing_opt->count() > 0) options->set_max_node_spacing(f.max_node_spacing);
   options->set_threads(f.threads);
 }
 
@@ -205,6 +209,10 @@ Subcommand AddMergeCommand(CLI::App& parent) {
   f.endpoint_tolerance_opt =
       app->add_option("--endpoint-tolerance", f.endpoint_tolerance,
                       "Largest distance between inputs' start (goal) waypoints (default 1e-6)");
+  f.max_node_spacing_opt = app->add_option(
+      "--max-node-spacing", f.max_node_spacing,
+      "Subdivide input edges longer than this in the H-Graph, so bridges can leave an input "
+      "mid-edge (configuration distance; default 0 = waypoints only)");
   app->add_option("--threads", f.threads, "Worker threads (0 = all cores)")->capture_default_str();
   app->add_flag("-q,--quiet", f.quiet, "No progress on stderr");
   app->add_flag("--shortcut", f.shortcut,

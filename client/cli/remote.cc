@@ -279,6 +279,9 @@ int RunRemoteMerge(CLI::App* app, const RemoteOptions& remote) {
     if (Given(app, "--endpoint-tolerance")) {
       options->set_endpoint_tolerance(Flag<double>(app, "--endpoint-tolerance", 0));
     }
+    if (Given(app, "--max-node-spacing")) {
+      options->set_max_node_spacing(Flag<double>(app, "--max-node-spacing", 0));
+    }
     options->set_threads(Flag<int>(app, "--threads", 0));
   } catch (const Error& e) {
     RethrowWithFlag(e, {{"measure.k", "--k"}, {"measure.safety", "--safety"}});

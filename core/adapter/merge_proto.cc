@@ -123,6 +123,10 @@ MergeOptions MergeOptionsFromProto(const v1::MergeOptions& proto) {
     RequireNonNegative(proto.endpoint_tolerance(), "options.endpoint_tolerance");
     options.endpoint_tolerance = proto.endpoint_tolerance();
   }
+  if (proto.has_max_node_spacing()) {
+    RequireNonNegative(proto.max_node_spacing(), "options.max_node_spacing");
+    options.max_node_spacing = proto.max_node_spacing();
+  }
   return options;
 }
 
@@ -185,6 +189,7 @@ v1::MergeResult MergeResultToProto(const MergeResult& result) {
   timing->set_total_ms(t.total_ms);
   for (int p : result.source_path) proto.add_source_path(p);
   for (int i : result.source_index) proto.add_source_index(i);
+  for (double f : result.source_fraction) proto.add_source_fraction(f);
   *proto.mutable_measure() = MeasureToProto(result.measure);
   proto.set_variant(VariantToProto(result.variant));
   proto.set_best_input(result.best_input);

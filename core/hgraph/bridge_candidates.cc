@@ -107,9 +107,12 @@ void ValidateCandidateOptions(const CandidateOptions& options) {
 double MeanInputEdgeLength(const HGraph& graph, const Space& space) {
   double total = 0;
   int count = 0;
+  // The inputs' own waypoints, not the nodes subdivision adds: the automatic parameters keep
+  // their scale when the H-Graph is made denser.
   for (int p = 0; p < graph.num_paths(); ++p) {
-    for (int e : graph.path_edges(p)) {
-      total += space.Distance(graph.node(graph.edge(e).u).q, graph.node(graph.edge(e).v).q);
+    const std::vector<Config>& waypoints = graph.path(p).waypoints;
+    for (size_t j = 0; j + 1 < waypoints.size(); ++j) {
+      total += space.Distance(waypoints[j], waypoints[j + 1]);
       ++count;
     }
   }

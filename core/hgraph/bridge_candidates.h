@@ -50,7 +50,8 @@ struct CandidateSet {
 CandidateSet BridgeCandidates(const HGraph& graph, const Space& space,
                               const CandidateOptions& options);
 
-// Mean length of the input edges of the graph (the scale of the automatic parameters).
+// Mean length of the edges between the inputs' waypoints (the scale of the automatic
+// parameters).
 double MeanInputEdgeLength(const HGraph& graph, const Space& space);
 
 }  // namespace hgraph

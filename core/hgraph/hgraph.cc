@@ -6,10 +6,14 @@
 
 namespace hgraph {
 
-HGraph::HGraph(const Space& space, std::vector<InputPath> paths, double endpoint_tolerance)
+HGraph::HGraph(const Space& space, std::vector<InputPath> paths, double endpoint_tolerance,
+               double max_node_spacing)
     : paths_(std::move(paths)) {
   if (!std::isfinite(endpoint_tolerance) || endpoint_tolerance < 0) {
     throw InputError("options.endpoint_tolerance", "must be finite and >= 0");
+  }
+  if (!std::isfinite(max_node_spacing) || max_node_spacing < 0) {
+    throw InputError("options.max_node_spacing", "must be finite and >= 0 (0 = off)");
   }
   if (paths_.empty()) throw InputError("paths", "at least one input path is required");
   for (size_t p = 0; p < paths_.size(); ++p) {
@@ -56,11 +60,34 @@ HGraph::HGraph(const Space& space, std::vector<InputPath> paths, double endpoint
   for (size_t p = 0; p < paths_.size(); ++p) {
     const auto& waypoints = paths_[p].waypoints;
     std::vector<int>& ids = path_nodes_[p];
-    ids.push_back(start_id());
-    for (size_t j = 1; j + 1 < waypoints.size(); ++j) {
+    const auto add_node = [&](HNode node) {
       ids.push_back(num_nodes());
-      nodes_.push_back(HNode{.q = waypoints[j], .path = static_cast<int>(p), .index = static_cast<int>(j)});
+      nodes_.push_back(std::move(node));
       adjacency_.emplace_back();
+    };
+    ids.push_back(start_id());
+    for (size_t j = 0; j + 1 < waypoints.size(); ++j) {
+      const int index = static_cast<int>(j);
+      if (j > 0) add_node(HNode{.q = waypoints[j], .path = static_cast<int>(p), .index = index});
+      if (max_node_spacing <= 0) continue;
+      const double length = space.Distance(waypoints[j], waypoints[j + 1]);
+      const double parts = std::ceil(length / max_node_spacing);
+      // A bound on the parts keeps a tiny spacing from exhausting memory; the message says how
+      // to stay under it.
+      if (parts > kMaxPartsPerEdge) {
+        throw InputError("options.max_node_spacing",
+                         std::to_string(max_node_spacing) + " would cut edge " +
+                             std::to_string(j) + " of path '" + paths_[p].name + "' (length " +
+                             std::to_string(length) + ") into more than " +
+                             std::to_string(kMaxPartsPerEdge) + " parts");
+      }
+      for (int k = 1; k < static_cast<int>(parts); ++k) {
+        const double t = k / parts;
+        add_node(HNode{.q = space.Interpolate(waypoints[j], waypoints[j + 1], t),
+                       .path = static_cast<int>(p),
+                       .index = index,
+                       .t = t});
+      }
     }
     ids.push_back(goal_id());
     for (size_t j = 1; j < ids.size(); ++j) {

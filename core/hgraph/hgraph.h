@@ -21,10 +21,13 @@ struct InputPath {
 };
 
 // A node: a configuration and where it came from. The shared start and goal come from path 0.
+// A node added by subdivision lies on the input edge (index, index + 1) at fraction t in (0, 1);
+// an input waypoint has t = 0.
 struct HNode {
   Config q;
   int path = 0;
   int index = 0;
+  double t = 0;
 };
 
 // An edge and what the local planner found about it (state kUnchecked until checked).
@@ -39,11 +42,20 @@ struct HEdge {
 // writes each edge's report from exactly one worker).
 class HGraph {
  public:
+  // The most nodes subdivision puts on one input edge.
+  static constexpr int kMaxPartsPerEdge = 10000;
+
   // Validates every waypoint against the space (InputError naming "paths[i].waypoints[j]"),
   // requires at least one path of at least two waypoints, and shared endpoints: a path whose
   // first (last) waypoint is farther than endpoint_tolerance from path 0's is rejected with an
   // InputError naming it. Quaternions are normalised. Adds every input edge, unchecked.
-  HGraph(const Space& space, std::vector<InputPath> paths, double endpoint_tolerance);
+  //
+  // max_node_spacing > 0 subdivides every input edge longer than it into equal parts no longer
+  // than it (nodes on the input's own straight motion, so the inputs are unchanged as motions):
+  // bridges can then leave an input in the middle of a long edge, not only at its waypoints.
+  // 0 keeps the waypoints only.
+  HGraph(const Space& space, std::vector<InputPath> paths, double endpoint_tolerance,
+         double max_node_spacing = 0);
 
   int num_nodes() const { return static_cast<int>(nodes_.size()); }
   int num_edges() const { return static_cast<int>(edges_.size()); }
@@ -52,7 +64,8 @@ class HGraph {
   const HEdge& edge(int i) const { return edges_[i]; }
   HEdge& mutable_edge(int i) { return edges_[i]; }
   const InputPath& path(int p) const { return paths_[p]; }
-  // Node ids along input path p, from the start node to the goal node.
+  // Node ids along input path p, from the start node to the goal node (with the nodes added by
+  // subdivision).
   const std::vector<int>& path_nodes(int p) const { return path_nodes_[p]; }
   // Edge ids along input path p.
   const std::vector<int>& path_edges(int p) const { return path_edges_[p]; }

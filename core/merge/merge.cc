@@ -73,7 +73,8 @@ HybridizationSession::HybridizationSession(const MotionChecker& checker,
         ValidateMeasure(request.measure);
         ValidateCandidateOptions(request.options.candidates);
         ResolveThreads(request.options.threads);
-        return HGraph(checker.space(), request.paths, request.options.endpoint_tolerance);
+        return HGraph(checker.space(), request.paths, request.options.endpoint_tolerance,
+                      request.options.max_node_spacing);
       })()) {
   const Clock::time_point started = Clock::now();
   build_stats_.threads = ResolveThreads(options_.threads);
@@ -240,6 +241,7 @@ MergeResult HybridizationSession::Query(const MeasureSpec& measure,
     result.path.waypoints.push_back(node.q);
     result.source_path.push_back(node.path);
     result.source_index.push_back(node.index);
+    result.source_fraction.push_back(node.t);
   }
   result.path.name = "merged";
   result.objective = Objective(measure, result.quality);
@@ -262,10 +264,16 @@ MergeResult HybridizationSession::Query(const MeasureSpec& measure,
       length += edge.length;
       edges.push_back(e);
       if (report.valid && edge.state != EdgeState::kValid) {
+        // Name the input's own edge and the fraction along it, also where subdivision split it.
+        const HNode& from = graph_.node(ids[j]);
+        const HNode& to = graph_.node(ids[j + 1]);
+        const double t1 = to.t > 0 ? to.t : 1.0;
+        const double t = from.t + std::max(0.0, edge.invalid_at) * (t1 - from.t);
         report.valid = false;
-        report.invalid_edge = static_cast<int>(j);
-        report.invalid_reason = "edge " + std::to_string(j) + " -> " + std::to_string(j + 1) +
-                                " is invalid at t=" + std::to_string(edge.invalid_at);
+        report.invalid_edge = from.index;
+        report.invalid_reason = "edge " + std::to_string(from.index) + " -> " +
+                                std::to_string(from.index + 1) + " is invalid at t=" +
+                                std::to_string(t);
       }
     }
     if (report.valid) {

@@ -20,6 +20,8 @@ struct MergeOptions {
   CandidateOptions candidates;
   double endpoint_tolerance = 1e-6;
   int threads = 0;  // worker threads; 0 = all cores
+  // > 0: input edges longer than this are subdivided in the H-Graph (see HGraph); 0 = off.
+  double max_node_spacing = 0;
 };
 
 struct MergeRequest {
@@ -75,6 +77,7 @@ struct MergeResult {
   MergeTiming timing;
   std::vector<int> source_path;
   std::vector<int> source_index;
+  std::vector<double> source_fraction;  // along edge (source_index, +1); 0 at input waypoints
   MeasureSpec measure;
   Variant variant = Variant::kEditDistance;
   int best_input = -1;

@@ -457,7 +457,12 @@ TEST(AdapterTest, MergeOptionsDefaultsAndErrors) {
   EXPECT_EQ(options.candidates.radius, CandidateOptions().radius);
   EXPECT_EQ(options.candidates.gap_init, CandidateOptions().gap_init);
   EXPECT_EQ(options.endpoint_tolerance, MergeOptions().endpoint_tolerance);
+  EXPECT_EQ(options.max_node_spacing, 0);
 
+  proto.set_max_node_spacing(-0.5);
+  EXPECT_EQ(ErrorOf([&] { MergeOptionsFromProto(proto); }).field(), "options.max_node_spacing");
+  proto.set_max_node_spacing(0.25);
+  EXPECT_EQ(MergeOptionsFromProto(proto).max_node_spacing, 0.25);
   proto.set_variant(v1::VARIANT_K_NEAREST);
   proto.set_phi(7);
   proto.set_radius(2.5);
@@ -514,6 +519,7 @@ TEST(AdapterTest, MergeResultToProtoAndJson) {
   result.timing.total_ms = 8.5;
   result.source_path = {0, 0};
   result.source_index = {0, 3};
+  result.source_fraction = {0, 0.5};
   result.variant = Variant::kNeighborhood;
   result.best_input = 0;
   result.objective = 1.5;
@@ -525,6 +531,7 @@ TEST(AdapterTest, MergeResultToProtoAndJson) {
   EXPECT_EQ(proto.stats().collision_checks(), 1234567890123);
   EXPECT_EQ(proto.variant(), v1::VARIANT_NEIGHBORHOOD);
   EXPECT_EQ(proto.source_index(1), 3);
+  EXPECT_EQ(proto.source_fraction(1), 0.5);
 
   const std::string json = ToJson(proto);
   for (const char* key :

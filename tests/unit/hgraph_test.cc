@@ -43,6 +43,53 @@ TEST(HGraphTest, SharesStartAndGoalAndAddsInputEdges) {
   EXPECT_EQ(graph.num_edges(), 5);
 }
 
+TEST(HGraphTest, SubdivisionPutsNodesOnTheInputEdges) {
+  const Space space = Plane();
+  const std::vector<InputPath> paths = {
+      InputPath{.name = "a", .waypoints = {P(0, 0), P(0, 3.5), P(9, 9)}},
+      InputPath{.name = "b", .waypoints = {P(0, 0), P(0.5, 0.5), P(9, 9)}}};
+  const HGraph plain(space, paths, 1e-6);
+  const HGraph dense(space, paths, 1e-6, /*max_node_spacing=*/1.0);
+  // a: edge 0 (3.5) in 4 parts, edge 1 (|(9, 5.5)| = 10.55) in 11; b: edge 0 (0.71) whole,
+  // edge 1 (12.02) in 13.
+  EXPECT_EQ(dense.num_nodes(), plain.num_nodes() + 3 + 10 + 12);
+  EXPECT_EQ(dense.num_edges(), (4 + 11) + (1 + 13));
+  for (int p = 0; p < 2; ++p) {
+    const std::vector<int>& ids = dense.path_nodes(p);
+    double length = 0;
+    double plain_length = 0;
+    for (size_t j = 0; j + 1 < ids.size(); ++j) {
+      const double d = space.Distance(dense.node(ids[j]).q, dense.node(ids[j + 1]).q);
+      EXPECT_LE(d, 1.0 + 1e-12);
+      length += d;
+    }
+    for (size_t j = 0; j + 1 < paths[p].waypoints.size(); ++j) {
+      plain_length += space.Distance(paths[p].waypoints[j], paths[p].waypoints[j + 1]);
+    }
+    EXPECT_NEAR(length, plain_length, 1e-9) << "the input's motion is unchanged";
+    for (size_t j = 1; j + 1 < ids.size(); ++j) {
+      const HNode& node = dense.node(ids[j]);
+      EXPECT_EQ(node.path, p);
+      // The node is where the input is at fraction t of its edge (index, index + 1).
+      const Config expected = space.Interpolate(paths[p].waypoints[node.index],
+                                                paths[p].waypoints[node.index + 1], node.t);
+      EXPECT_TRUE(node.q.isApprox(expected)) << "path " << p << " node " << j;
+      EXPECT_TRUE(node.t == 0 || (node.t > 0 && node.t < 1));
+    }
+  }
+  EXPECT_EQ(dense.node(dense.path_nodes(0)[4]).index, 1);  // a's waypoint 1, after 3 new nodes
+  EXPECT_EQ(dense.node(dense.path_nodes(0)[4]).t, 0);
+  // The automatic parameters keep the inputs' scale.
+  EXPECT_DOUBLE_EQ(MeanInputEdgeLength(dense, space), MeanInputEdgeLength(plain, space));
+
+  EXPECT_EQ(ErrorOf([&] { HGraph(space, paths, 1e-6, -1); }),
+            "options.max_node_spacing: must be finite and >= 0 (0 = off)");
+  EXPECT_EQ(ErrorOf([&] { HGraph(space, paths, 1e-6, NAN); }),
+            "options.max_node_spacing: must be finite and >= 0 (0 = off)");
+  EXPECT_NE(ErrorOf([&] { HGraph(space, paths, 1e-6, 1e-9); }).find("more than 10000 parts"),
+            std::string::npos);
+}
+
 TEST(HGraphTest, RejectsBadInputNamingTheField) {
   const Space space = Plane();
   EXPECT_EQ(ErrorOf([&] { HGraph(space, {}, 1e-6); }),

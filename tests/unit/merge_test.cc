@@ -189,6 +189,57 @@ TEST_F(MergeTest, InvalidInputEdgeIsReportedAndNotUsed) {
   EXPECT_GT(r.path.waypoints.size(), 2u);
 }
 
+TEST_F(MergeTest, SubdividedInputsMergeNoWorseAndNameTheInputsOwnEdges) {
+  const LocalPlanner planner = MakePlanner();
+  std::vector<InputPath> inputs = PerturbedPaths(planner, 7, 3);
+  const InputPath straight{.name = "straight",
+                           .waypoints = {inputs[0].waypoints.front(),
+                                         inputs[0].waypoints.back()}};
+  inputs.push_back(straight);  // through the discs: its only edge is invalid
+  for (const MeasureSpec& measure :
+       {MeasureSpec{.type = MeasureType::kLength},
+        MeasureSpec{.type = MeasureType::kInverseClearance, .k = 3}}) {
+    SCOPED_TRACE(MeasureTypeName(measure.type));
+    const MergeOptions plain_options{.candidates = {.variant = Variant::kAllPairs}};
+    MergeOptions dense_options = plain_options;
+    dense_options.max_node_spacing = 3.0;
+    const MergeResult plain =
+        Merge(planner, MergeRequest{.paths = inputs, .measure = measure, .options = plain_options});
+    const MergeResult dense =
+        Merge(planner, MergeRequest{.paths = inputs, .measure = measure, .options = dense_options});
+    EXPECT_GT(dense.stats.nodes, plain.stats.nodes);
+    ExpectValid(planner, dense.path);
+    EXPECT_TRUE(dense.path.waypoints.front().isApprox(inputs[0].waypoints.front()));
+    EXPECT_TRUE(dense.path.waypoints.back().isApprox(inputs[0].waypoints.back()));
+    if (measure.type == MeasureType::kLength) {
+      // All-pairs on the subdivided graph still holds every pair of the plain one.
+      EXPECT_LE(dense.quality.length, plain.quality.length + 1e-9);
+    }
+    EXPECT_LE(dense.objective, dense.best_input_objective + 1e-9);
+    // Inputs are reported as the inputs, not as their subdivided edges.
+    ASSERT_EQ(dense.inputs.size(), 4u);
+    for (size_t i = 0; i < 3; ++i) {
+      EXPECT_TRUE(dense.inputs[i].valid);
+      EXPECT_EQ(dense.inputs[i].waypoints, static_cast<int>(inputs[i].waypoints.size()));
+      EXPECT_NEAR(dense.inputs[i].quality.length, plain.inputs[i].quality.length, 1e-9);
+    }
+    EXPECT_FALSE(dense.inputs[3].valid);
+    EXPECT_EQ(dense.inputs[3].invalid_edge, 0);
+    EXPECT_NE(dense.inputs[3].invalid_reason.find("edge 0 -> 1"), std::string::npos);
+    // Where each output waypoint lies on its input.
+    ASSERT_EQ(dense.source_fraction.size(), dense.path.waypoints.size());
+    for (size_t j = 0; j < dense.path.waypoints.size(); ++j) {
+      const InputPath& source = inputs[dense.source_path[j]];
+      const int index = dense.source_index[j];
+      const double t = dense.source_fraction[j];
+      const Config at = t == 0 ? source.waypoints[index]
+                               : planner.space().Interpolate(source.waypoints[index],
+                                                             source.waypoints[index + 1], t);
+      EXPECT_TRUE(dense.path.waypoints[j].isApprox(at)) << "waypoint " << j;
+    }
+  }
+}
+
 TEST_F(MergeTest, CancelStopsTheMerge) {
   const LocalPlanner planner = MakePlanner();
   MergeRequest request{.paths = CirclePaths(), .options = {.candidates = {.variant = Variant::kAllPairs}}};

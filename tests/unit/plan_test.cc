@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <string>
 
 #include "core/adapter/scene_proto.h"
@@ -246,7 +247,9 @@ TEST_F(PlanTest, ShortcutAndOmplHybridizationKeepPathsValidAndNoLonger) {
   }
 }
 
-// The built-in scenes load, their queries are valid, and the paper's PRM solves each quickly.
+// The built-in scenes load, their queries are valid, and the paper's PRM solves each. PRM stops at
+// its first solution; the budget is generous so that a loaded machine does not fail the test
+// (how fast PRM is belongs to the benchmarks and scenes/README.md, not here).
 TEST(BuiltInScenesTest, PRMSolvesEveryScene) {
   for (const std::string name : {"maze", "grid", "wrench", "double_wrench", "circles"}) {
     SCOPED_TRACE(name);
@@ -254,10 +257,11 @@ TEST(BuiltInScenesTest, PRMSolvesEveryScene) {
     ASSERT_TRUE(f.scene->start && f.scene->goal);
     const PlanResult result = PlanPaths(
         *f.planner, {.planner = PlannerType::kPRM, .start = *f.scene->start,
-                     .goal = *f.scene->goal, .count = 1, .time_s = 10, .seed = 1,
+                     .goal = *f.scene->goal, .count = 1, .time_s = 120, .seed = 1,
                      .resolution = f.resolution});
     ASSERT_EQ(result.paths.size(), 1u) << result.attempts[0].status;
     ExpectValid(*f.planner, result.paths[0]);
+    std::printf("%s: PRM found a path in %.1f ms\n", name.c_str(), result.attempts[0].elapsed_ms);
   }
 }
 
