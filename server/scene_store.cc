@@ -7,7 +7,7 @@
 
 #include "core/adapter/scene_proto.h"
 #include "core/common/error.h"
-#include "server/digest.h"
+#include "core/common/digest.h"
 
 namespace hgraph::server {
 namespace {

@@ -3,7 +3,7 @@
 #include <algorithm>
 
 #include "core/common/error.h"
-#include "server/digest.h"
+#include "core/common/digest.h"
 
 namespace hgraph::server {
 namespace {

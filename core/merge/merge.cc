@@ -12,6 +12,7 @@
 #include <mutex>
 
 #include "core/common/error.h"
+#include "core/merge/path_check.h"
 #include "core/search/search.h"
 
 namespace hgraph {
@@ -67,9 +68,7 @@ class ProgressReporter {
 
 HybridizationSession::HybridizationSession(const MotionChecker& checker,
                                            const MergeRequest& request)
-    : checker_(&checker),
-      options_(request.options),
-      graph_(([&]() -> HGraph {
+    : checker_(&checker), options_(request.options), graph_(([&]() -> HGraph {
         ValidateMeasure(request.measure);
         ValidateCandidateOptions(request.options.candidates);
         ResolveThreads(request.options.threads);
@@ -94,8 +93,7 @@ HybridizationSession::HybridizationSession(const MotionChecker& checker,
 
   phase = Clock::now();
   request.cancel.ThrowIfStopped();
-  const CandidateSet candidates =
-      BridgeCandidates(graph_, checker.space(), options_.candidates);
+  const CandidateSet candidates = BridgeCandidates(graph_, checker.space(), options_.candidates);
   const bool aligned = options_.candidates.variant == Variant::kEditDistance ||
                        options_.candidates.variant == Variant::kEditDistanceNeighborhood;
   (aligned ? build_timing_.align_ms : build_timing_.candidates_ms) = MsSince(phase);
@@ -138,11 +136,10 @@ void HybridizationSession::CheckEdges(const std::vector<int>& edge_ids, bool nee
                           HEdge& edge = graph_.mutable_edge(edge_ids[k]);
                           const EdgeReport previous = std::move(edge.report);
                           edge.report = checker_->CheckEdge(
-                              EdgeCheckRequest{
-                                  .from = &graph_.node(edge.u).q,
-                                  .to = &graph_.node(edge.v).q,
-                                  .need_clearance = need_clearance,
-                                  .known_valid = previous.state == EdgeState::kValid});
+                              EdgeCheckRequest{.from = &graph_.node(edge.u).q,
+                                               .to = &graph_.node(edge.v).q,
+                                               .need_clearance = need_clearance,
+                                               .known_valid = previous.state == EdgeState::kValid});
                           // A re-check for clearance keeps counting what the first check cost.
                           if (previous.state != EdgeState::kUnchecked) {
                             edge.report.collision_checks += previous.collision_checks;
@@ -208,8 +205,7 @@ MergeResult HybridizationSession::Query(const MeasureSpec& measure,
     if (!best.found) {
       if (measure.type == MeasureType::kSafeLength) {
         throw Error(ErrorCode::kFailedPrecondition, "measure.safety",
-                    "no path in the H-Graph keeps clearance >= " +
-                        std::to_string(measure.safety));
+                    "no path in the H-Graph keeps clearance >= " + std::to_string(measure.safety));
       }
       throw Error(ErrorCode::kFailedPrecondition, "paths",
                   "the valid edges of the H-Graph do not connect start and goal (are the "
@@ -247,37 +243,28 @@ MergeResult HybridizationSession::Query(const MeasureSpec& measure,
   // Every input, under every measure, from the reports stored on its edges.
   PathQuality best_quality;
   for (int p = 0; p < graph_.num_paths(); ++p) {
-    const InputPath& path = graph_.path(p);
     const std::vector<int>& ids = graph_.path_nodes(p);
-    InputReport report{.name = path.name,
-                       .valid = true,
-                       .waypoints = static_cast<int>(path.waypoints.size())};
-    std::vector<int> edges;
-    double length = 0;
+    std::vector<const EdgeReport*> edges(ids.size() - 1, nullptr);
+    // An edge another input added first may run against this path's direction: its invalid_at
+    // is then measured from the other end.
+    std::vector<EdgeReport> reversed;
+    reversed.reserve(ids.size());
     for (size_t j = 0; j + 1 < ids.size(); ++j) {
       if (ids[j] == ids[j + 1]) continue;
       const int e = graph_.FindEdge(ids[j], ids[j + 1]);
       HGRAPH_CHECK(e >= 0);
-      const EdgeReport& edge = graph_.edge(e).report;
-      length += edge.length;
-      edges.push_back(e);
-      if (report.valid && edge.state != EdgeState::kValid) {
-        report.valid = false;
-        report.invalid_edge = static_cast<int>(j);
-        report.invalid_reason = "edge " + std::to_string(j) + " -> " + std::to_string(j + 1) +
-                                " is invalid at t=" + std::to_string(edge.invalid_at);
+      const HEdge& edge = graph_.edge(e);
+      edges[j] = &edge.report;
+      if (edge.u != ids[j] && edge.report.state == EdgeState::kInvalid) {
+        reversed.push_back(edge.report);  // invalid: no profile to copy
+        reversed.back().invalid_at = 1 - edge.report.invalid_at;
+        edges[j] = &reversed.back();
       }
     }
-    if (report.valid) {
-      report.quality = EvaluateEdges(graph_, edges, measure.k);
-      if (result.best_input < 0 || Better(measure, report.quality, best_quality)) {
-        result.best_input = p;
-        best_quality = report.quality;
-      }
-    } else {
-      report.quality.k = measure.k;
-      report.quality.length = length;
-      report.quality.min_clearance = 0;
+    InputReport report = ReportInputPath(checker_->space(), graph_.path(p), edges, measure.k);
+    if (report.valid && (result.best_input < 0 || Better(measure, report.quality, best_quality))) {
+      result.best_input = p;
+      best_quality = report.quality;
     }
     result.inputs.push_back(std::move(report));
   }
