@@ -442,7 +442,7 @@ HEALTH_SERVING, HEALTH_NOT_SERVING = b"\x08\x01", b"\x08\x02"
 
 
 def test_sigterm_drains_then_cancels_in_flight_merge_after_grace_and_exits_0():
-    drain_s, grace_s = 2.0, 0.5
+    drain_s, grace_s = 1.0, 0.5
     s = Server("--grace-s", str(grace_s), "--drain-s", str(drain_s))
     with s.client() as c:
         health = c.channel.unary_unary("/grpc.health.v1.Health/Check")
