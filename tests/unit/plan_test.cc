@@ -28,7 +28,8 @@ Fixture LoadBuiltIn(const std::string& name) {
   f.resolution = SceneResolution(ReadSceneFile(file));
   f.scene = LoadSceneFile(file);
   f.world = std::make_shared<const CollisionWorld>(f.scene);
-  f.planner = std::make_unique<LocalPlanner>(f.world, LocalPlannerOptions{.resolution = f.resolution});
+  f.planner =
+      std::make_unique<LocalPlanner>(f.world, LocalPlannerOptions{.resolution = f.resolution});
   return f;
 }
 
@@ -162,9 +163,11 @@ TEST(PlanNoPathTest, NoPathInTimeIsReportedNotThrown) {
   const LocalPlanner planner(world);
   for (PlannerType type : {PlannerType::kPRM, PlannerType::kRRTConnect, PlannerType::kRRT}) {
     SCOPED_TRACE(PlannerTypeName(type));
-    const PlanResult result = PlanPaths(
-        planner, {.planner = type, .start = Eigen::Vector2d(2, 5), .goal = Eigen::Vector2d(8, 5),
-                  .count = 2, .time_s = 0.2});
+    const PlanResult result = PlanPaths(planner, {.planner = type,
+                                                  .start = Eigen::Vector2d(2, 5),
+                                                  .goal = Eigen::Vector2d(8, 5),
+                                                  .count = 2,
+                                                  .time_s = 0.2});
     EXPECT_TRUE(result.paths.empty());
     ASSERT_EQ(result.attempts.size(), 2u);
     for (const PlanAttempt& a : result.attempts) {
@@ -220,8 +223,8 @@ TEST_F(PlanTest, ShortcutAndOmplHybridizationKeepPathsValidAndNoLonger) {
   double shortest = 1e300;
   for (const InputPath& path : planned.paths) shortest = std::min(shortest, Length(space, path));
 
-  const InputPath shortcut = ShortcutPath(*maze_->planner, planned.paths[0],
-                                          {.seed = 1, .resolution = maze_->resolution});
+  const InputPath shortcut =
+      ShortcutPath(*maze_->planner, planned.paths[0], {.seed = 1, .resolution = maze_->resolution});
   ExpectValid(*maze_->planner, shortcut);
   EXPECT_EQ(shortcut.waypoints.front(), planned.paths[0].waypoints.front());
   EXPECT_EQ(shortcut.waypoints.back(), planned.paths[0].waypoints.back());
@@ -248,14 +251,20 @@ TEST_F(PlanTest, ShortcutAndOmplHybridizationKeepPathsValidAndNoLonger) {
 
 // The built-in scenes load, their queries are valid, and the paper's PRM solves each quickly.
 TEST(BuiltInScenesTest, PRMSolvesEveryScene) {
+  // PRM returns at its first solution, so the budget only matters on a starved machine: alone,
+  // double_wrench takes most of 10 s on the 2-core VM, and under ctest -j2 beside the service
+  // tests it ran out of them.
   for (const std::string name : {"maze", "grid", "wrench", "double_wrench", "circles"}) {
     SCOPED_TRACE(name);
     const Fixture f = LoadBuiltIn(name);
     ASSERT_TRUE(f.scene->start && f.scene->goal);
-    const PlanResult result = PlanPaths(
-        *f.planner, {.planner = PlannerType::kPRM, .start = *f.scene->start,
-                     .goal = *f.scene->goal, .count = 1, .time_s = 10, .seed = 1,
-                     .resolution = f.resolution});
+    const PlanResult result = PlanPaths(*f.planner, {.planner = PlannerType::kPRM,
+                                                     .start = *f.scene->start,
+                                                     .goal = *f.scene->goal,
+                                                     .count = 1,
+                                                     .time_s = 40,
+                                                     .seed = 1,
+                                                     .resolution = f.resolution});
     ASSERT_EQ(result.paths.size(), 1u) << result.attempts[0].status;
     ExpectValid(*f.planner, result.paths[0]);
   }
