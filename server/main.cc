@@ -1,6 +1,8 @@
 // hgraph-server: the PathMerger gRPC service, health checking, reflection and Prometheus
-// metrics. SIGTERM (or SIGINT) shuts down gracefully: health goes NOT_SERVING, new calls are
-// refused, in-flight calls get --grace-s to finish and are then cancelled, and the process
+// metrics. SIGTERM (or SIGINT) shuts down gracefully: health goes NOT_SERVING while calls are
+// still served for --drain-s (so that load balancers and Kubernetes readiness probes stop sending
+// new calls here before any is refused; a second signal ends the drain early), then new calls
+// are refused, in-flight calls get --grace-s to finish and are then cancelled, and the process
 // exits 0.
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
 #include <grpcpp/grpcpp.h>
@@ -35,6 +37,7 @@ struct Flags {
   int64_t max_blob_bytes = int64_t{256} << 20;
   double session_ttl_s = 3600;
   double grace_s = 10;
+  double drain_s = 2;
   int progress_interval_ms = 100;
   std::string log_level = "info";
 };
@@ -82,6 +85,11 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--grace-s", flags.grace_s,
                  "on SIGTERM, time in-flight calls get to finish before they are cancelled")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  app.add_option("--drain-s", flags.drain_s,
+                 "on SIGTERM, time health answers NOT_SERVING while calls are still accepted, "
+                 "before shutdown starts (a second signal ends it early)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   app.add_option("--progress-interval-ms", flags.progress_interval_ms,
@@ -155,8 +163,24 @@ int main(int argc, char** argv) {
       signal = sigtimedwait(&signals, nullptr, &tick);
       if (signal < 0) service.ExpireIdleSessions();
     }
-    spdlog::info("received signal {}: shutting down (grace {} s)", signal, flags.grace_s);
+    spdlog::info("received signal {}: draining for {} s, then shutting down (grace {} s)", signal,
+                 flags.drain_s, flags.grace_s);
     health->SetServingStatus(false);
+    // The drain: NOT_SERVING, but every call is still accepted and served.
+    const auto drain_end = std::chrono::steady_clock::now() +
+                           std::chrono::milliseconds(static_cast<int64_t>(flags.drain_s * 1e3));
+    for (;;) {
+      const auto left = std::chrono::duration_cast<std::chrono::nanoseconds>(
+          drain_end - std::chrono::steady_clock::now());
+      if (left.count() <= 0) break;
+      const timespec wait{.tv_sec = static_cast<time_t>(left.count() / 1000000000),
+                          .tv_nsec = static_cast<long>(left.count() % 1000000000)};
+      const int again = sigtimedwait(&signals, nullptr, &wait);
+      if (again > 0) {
+        spdlog::info("received signal {} while draining: shutting down now", again);
+        break;
+      }
+    }
     const auto grace = std::chrono::system_clock::now() +
                        std::chrono::milliseconds(static_cast<int64_t>(flags.grace_s * 1e3));
     // Refuses new calls at once; cancels calls still running at the deadline, which stops their

@@ -6,8 +6,8 @@
 #include <utility>
 
 #include "core/adapter/scene_proto.h"
+#include "core/common/digest.h"
 #include "core/common/error.h"
-#include "server/digest.h"
 
 namespace hgraph::server {
 namespace {
@@ -42,8 +42,7 @@ void CheckMesh(const v1::Shape& shape, const std::string& field, const SceneStor
                         " is not held by this server; upload it with UploadBlob first");
       }
       return;
-    case v1::MeshRef::kData:
-      return;
+    case v1::MeshRef::kData: return;
     case v1::MeshRef::SOURCE_NOT_SET:
       throw InputError(mesh_field, "one of data or digest must be set");
   }

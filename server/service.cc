@@ -14,6 +14,7 @@
 #include "core/adapter/scene_proto.h"
 #include "core/common/error.h"
 #include "core/merge/merge.h"
+#include "core/merge/path_check.h"
 #include "core/motion/local_planner.h"
 #ifdef HGRAPH_HAVE_PLAN
 #include "core/plan/plan.h"
@@ -392,12 +393,15 @@ PathMergerService::PathMergerService(const ServerOptions& options, Metrics& metr
       "grpc_server_handling_seconds", "Response latency of RPCs handled by the server, in seconds.",
       {0.001, 0.005, 0.01, 0.025, 0.05, 0.1, 0.25, 0.5, 1, 2.5, 5, 10, 30, 60, 300});
   metrics_.DeclareCounter("hgraph_merges_total", "Merges and re-queries that returned a result.");
-  metrics_.DeclareCounter("hgraph_merge_collision_checks_total",
-                          "Collision checks run by merges and re-queries.");
-  metrics_.DeclareCounter("hgraph_merge_distance_queries_total",
-                          "Distance (clearance) queries run by merges and re-queries.");
-  metrics_.DeclareCounter("hgraph_merge_edges_checked_total",
-                          "Local-planner runs (input edges, bridges, clearance re-checks).");
+  metrics_.DeclareCounter(
+      "hgraph_merge_collision_checks_total",
+      "Collision checks run by merges, re-queries and path checks (by method).");
+  metrics_.DeclareCounter(
+      "hgraph_merge_distance_queries_total",
+      "Distance (clearance) queries run by merges, re-queries and path checks.");
+  metrics_.DeclareCounter(
+      "hgraph_merge_edges_checked_total",
+      "Local-planner runs (input edges, bridges, clearance re-checks, checked paths).");
   metrics_.DeclareCounter("hgraph_merge_edges_reused_total",
                           "Stored edge reports that served a re-query without a new check.");
   metrics_.DeclareHistogram("hgraph_merge_phase_seconds", "Wall time of each merge phase.",
@@ -596,6 +600,48 @@ grpc::ServerUnaryReactor* PathMergerService::Requery(grpc::CallbackServerContext
         *response->mutable_result() = MergeResultToProto(result);
         response->set_hgraph(request->hgraph());
         RecordMerge("Requery", response->result());
+      },
+      /*on_worker=*/true);
+  return call;
+}
+
+grpc::ServerUnaryReactor* PathMergerService::CheckPaths(grpc::CallbackServerContext* context,
+                                                        const v1::CheckPathsRequest* request,
+                                                        v1::CheckPathsResponse* response) {
+  auto* call = new UnaryCall(this, context, "CheckPaths", request->session());
+  call->Run(
+      [=, this](const CancelToken& token) {
+        const v1::Session session = sessions_.Touch(request->session(), "session");
+        CheckBatchLimits(request->paths(), options_);
+        LoadedScene scene = scenes_.Get(session.scene(), "session");
+        token.ThrowIfStopped();
+        const double resolution =
+            request->has_resolution() ? request->resolution() : SceneResolution(*scene.proto);
+        const LocalPlanner planner(scene.world, LocalPlannerOptions{.resolution = resolution});
+        // The same check as a merge's inputs (core/merge/path_check.h), on this call's share of
+        // the worker pool.
+        const PathCheckResult result = ::hgraph::CheckPaths(
+            planner, PathCheckRequest{
+                         .paths = PathsFromProto(request->paths()),
+                         .mode = request->sampled() ? CheckMode::kSampled : CheckMode::kCertified,
+                         .k = request->has_k() ? request->k() : 3.0,
+                         .threads = pool_.threads(),
+                         .field = "paths.paths",
+                         .cancel = token});
+        for (const InputReport& report : result.paths) {
+          *response->add_paths() = InputReportToProto(report);
+        }
+        response->set_collision_checks(result.collision_checks);
+        response->set_distance_queries(result.distance_queries);
+        response->set_resolution(resolution);
+        response->set_elapsed_ms(result.elapsed_ms);
+        const Labels labels = {{"method", "CheckPaths"}};
+        metrics_.Increment("hgraph_merge_collision_checks_total", labels,
+                           static_cast<double>(result.collision_checks));
+        metrics_.Increment("hgraph_merge_distance_queries_total", labels,
+                           static_cast<double>(result.distance_queries));
+        metrics_.Increment("hgraph_merge_edges_checked_total", labels,
+                           static_cast<double>(result.edges_checked));
       },
       /*on_worker=*/true);
   return call;

@@ -64,6 +64,9 @@ class PathMergerService final : public v1::PathMerger::CallbackService {
                                     v1::RequeryResponse* response) override;
   grpc::ServerWriteReactor<v1::PlanPathsResponse>* PlanPaths(
       grpc::CallbackServerContext* context, const v1::PlanPathsRequest* request) override;
+  grpc::ServerUnaryReactor* CheckPaths(grpc::CallbackServerContext* context,
+                                       const v1::CheckPathsRequest* request,
+                                       v1::CheckPathsResponse* response) override;
 
   // Drops sessions idle past their time-to-live and their H-Graphs; called periodically.
   void ExpireIdleSessions();

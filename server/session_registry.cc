@@ -2,8 +2,8 @@
 
 #include <algorithm>
 
+#include "core/common/digest.h"
 #include "core/common/error.h"
-#include "server/digest.h"
 
 namespace hgraph::server {
 namespace {
@@ -27,8 +27,8 @@ SessionRegistry::SessionRegistry(int max_sessions, std::chrono::milliseconds ttl
 
 void SessionRegistry::ValidateName(const std::string& name, const std::string& field) {
   if (name.rfind(kPrefix, 0) != 0 || name.size() != kPrefix.size() + 32) {
-    throw InputError(field, "must be \"sessions/<32 hex digits>\", got \"" + name.substr(0, 100) +
-                                "\"");
+    throw InputError(field,
+                     "must be \"sessions/<32 hex digits>\", got \"" + name.substr(0, 100) + "\"");
   }
   for (size_t i = kPrefix.size(); i < name.size(); ++i) {
     const char c = name[i];
@@ -44,8 +44,8 @@ std::string SessionRegistry::SessionOfHGraph(const std::string& hgraph, const st
                   std::all_of(hgraph.begin() + static_cast<long>(at + kHGraphs.size()),
                               hgraph.end(), [](char c) { return c >= '0' && c <= '9'; });
   if (!ok) {
-    throw InputError(field, "must be \"sessions/<id>/hgraphs/<n>\", got \"" +
-                                hgraph.substr(0, 120) + "\"");
+    throw InputError(
+        field, "must be \"sessions/<id>/hgraphs/<n>\", got \"" + hgraph.substr(0, 120) + "\"");
   }
   std::string session = hgraph.substr(0, at);
   ValidateName(session, field);
@@ -66,8 +66,9 @@ v1::Session SessionRegistry::Create(const v1::Digest& scene) {
   std::lock_guard lock(mutex_);
   if (static_cast<int>(sessions_.size()) >= max_sessions_) {
     throw Error(ErrorCode::kResourceExhausted, "",
-                std::to_string(sessions_.size()) + " sessions exist, the limit (--max-sessions); "
-                "delete one or let idle ones expire");
+                std::to_string(sessions_.size()) +
+                    " sessions exist, the limit (--max-sessions); "
+                    "delete one or let idle ones expire");
   }
   const std::string name = std::string(kPrefix) + RandomHex128();
   const Clock::time_point now = Clock::now();
@@ -85,8 +86,9 @@ v1::Session SessionRegistry::Touch(const std::string& name, const std::string& f
   const Clock::time_point now = Clock::now();
   if (it == sessions_.end() || it->second.expire_time <= now) {
     throw Error(ErrorCode::kNotFound, field,
-                "session " + name + " does not exist on this server (expired, deleted, or "
-                "created on another replica)");
+                "session " + name +
+                    " does not exist on this server (expired, deleted, or "
+                    "created on another replica)");
   }
   it->second.expire_time = now + ttl_;
   return ToProto(name, it->second);

@@ -37,6 +37,65 @@ LoadedScene LoadScene(v1::Scene proto, const std::string& path, double resolutio
   return loaded;
 }
 
+PathChecker LocalPathChecker(v1::Scene proto, const std::string& scene_file,
+                             std::shared_ptr<const Scene> scene) {
+  struct State {
+    v1::Scene proto;
+    std::string scene_file;
+    std::shared_ptr<const Scene> scene;
+    std::shared_ptr<const CollisionWorld> world;
+    std::map<double, std::unique_ptr<LocalPlanner>> planners;  // by resolution
+  };
+  auto state = std::make_shared<State>(
+      State{.proto = std::move(proto), .scene_file = scene_file, .scene = std::move(scene)});
+  return [state](const std::vector<InputPath>& paths, const CheckSettings& settings) {
+    const double resolution =
+        settings.resolution ? *settings.resolution : SceneResolution(state->proto);
+    if (state->scene == nullptr) {
+      state->scene = SceneFromProto(state->proto,
+                                    std::filesystem::path(state->scene_file).parent_path().string(),
+                                    BlobResolver());
+    }
+    if (state->world == nullptr)
+      state->world = std::make_shared<const CollisionWorld>(state->scene);
+    std::unique_ptr<LocalPlanner>& planner = state->planners[resolution];
+    if (planner == nullptr) {
+      planner = std::make_unique<LocalPlanner>(state->world,
+                                               LocalPlannerOptions{.resolution = resolution});
+    }
+    return CheckRun{
+        .result = CheckPaths(
+            *planner, PathCheckRequest{.paths = paths, .mode = settings.mode, .k = settings.k}),
+        .resolution = resolution};
+  };
+}
+
+int PrintCheck(const CheckRun& run, CheckMode mode) {
+  size_t valid = 0;
+  for (size_t i = 0; i < run.result.paths.size(); ++i) {
+    const InputReport& r = run.result.paths[i];
+    const std::string who = "path '" + r.name + "' (index " + std::to_string(i) + ")";
+    if (!r.valid) {
+      std::printf("%s: %s\n", who.c_str(), r.invalid_reason.c_str());
+      continue;
+    }
+    ++valid;
+    std::printf("%s: valid, %d waypoints, length %.6g", who.c_str(), r.waypoints, r.quality.length);
+    if (r.quality.has_clearance) std::printf(", min clearance %.6g", r.quality.min_clearance);
+    // Passed the collision test at every sample, but some stretch is too close to an obstacle
+    // for the clearance certificate even at the finest refinement.
+    if (mode == CheckMode::kCertified && !r.certified) std::printf(" (not certified everywhere)");
+    std::printf("\n");
+  }
+  std::printf(
+      "%zu of %zu paths valid (%s check, resolution %g, %lld collision checks, %lld distance "
+      "queries)\n",
+      valid, run.result.paths.size(), CheckModeName(mode), run.resolution,
+      static_cast<long long>(run.result.collision_checks),
+      static_cast<long long>(run.result.distance_queries));
+  return valid == run.result.paths.size() ? kExitOk : kExitCheckFailed;
+}
+
 ProgressPrinter::ProgressPrinter(bool enabled)
     : enabled_(enabled), tty_(isatty(fileno(stderr)) != 0) {}
 
@@ -64,11 +123,19 @@ void ProgressPrinter::Report(const Progress& progress) {
   phase_ = progress.phase;
   last_print_ = now;
   char line[256];
-  std::snprintf(
-      line, sizeof(line), "[%-9s] %lld/%lld  collision checks %lld  distance queries %lld  %.1f s",
-      progress.phase.c_str(), static_cast<long long>(progress.done),
-      static_cast<long long>(progress.total), static_cast<long long>(progress.collision_checks),
-      static_cast<long long>(progress.distance_queries), progress.elapsed_ms / 1000.0);
+  // Counts only where the phase has any (planning reports none).
+  if (progress.collision_checks > 0 || progress.distance_queries > 0) {
+    std::snprintf(line, sizeof(line),
+                  "[%-9s] %lld/%lld  collision checks %lld  distance queries %lld  %.1f s",
+                  progress.phase.c_str(), static_cast<long long>(progress.done),
+                  static_cast<long long>(progress.total),
+                  static_cast<long long>(progress.collision_checks),
+                  static_cast<long long>(progress.distance_queries), progress.elapsed_ms / 1000.0);
+  } else {
+    std::snprintf(line, sizeof(line), "[%-9s] %lld/%lld  %.1f s", progress.phase.c_str(),
+                  static_cast<long long>(progress.done), static_cast<long long>(progress.total),
+                  progress.elapsed_ms / 1000.0);
+  }
   if (tty_) {
     if (new_phase && line_open_) std::fputc('\n', stderr);
     std::fprintf(stderr, "\r\033[K%s", line);

@@ -8,6 +8,7 @@
 #include <mutex>
 #include <string>
 
+#include "client/cli/command.h"
 #include "core/collision/collision_world.h"
 #include "core/common/error.h"
 #include "core/common/progress.h"
@@ -31,6 +32,17 @@ struct LoadedScene {
 // local planner at `resolution`. The proto is read first (ReadSceneFile) so that the caller can
 // choose the resolution from it.
 LoadedScene LoadScene(v1::Scene proto, const std::string& path, double resolution);
+
+// Checks paths in process in the scene `proto` read from `scene_file` (meshes relative to its
+// folder), with the engine's CheckPaths on all cores. The scene is built from the proto on first
+// use unless the caller has built it already (`scene`).
+PathChecker LocalPathChecker(v1::Scene proto, const std::string& scene_file,
+                             std::shared_ptr<const Scene> scene = nullptr);
+
+// `hgraph check`'s printout of a check, wherever it ran: one line per path (length and minimum
+// clearance of each valid one, the first invalid edge of the others) and a summary. Returns
+// kExitOk if every path is valid, else kExitCheckFailed.
+int PrintCheck(const CheckRun& run, CheckMode mode);
 
 // Prints progress reports on stderr. On a terminal one line is redrawn in place; otherwise
 // (logs, CI) a plain line is written when a phase starts and then at most once a second.

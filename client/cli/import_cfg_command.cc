@@ -7,6 +7,7 @@
 #include "core/adapter/json_io.h"
 #include "core/adapter/ompl_cfg.h"
 #include "core/adapter/scene_proto.h"
+#include "core/common/error.h"
 
 namespace hgraph::cli {
 namespace {
@@ -17,6 +18,7 @@ struct ImportCfgFlags {
 };
 
 int RunImportCfg(const ImportCfgFlags& f) {
+  if (f.out.empty()) throw InputError("--out", "is required unless --server is given");
   v1::Scene scene = ReadOmplAppProblem(f.cfg);
   // Build it once so that a problem that would not load is reported now, not at the first merge.
   SceneFromProto(scene, std::filesystem::path(f.cfg).parent_path().string(), BlobResolver());
@@ -36,10 +38,12 @@ int RunImportCfg(const ImportCfgFlags& f) {
 Subcommand AddImportCfgCommand(CLI::App& parent) {
   auto flags = std::make_shared<ImportCfgFlags>();
   CLI::App* app = parent.add_subcommand(
-      "import-cfg", "Convert an OMPL.app problem (.cfg with COLLADA meshes) to a Scene JSON file.");
+      "import-cfg",
+      "Convert an OMPL.app problem (.cfg with COLLADA meshes) to a Scene JSON file; with "
+      "--server, also store it (meshes as blobs) on the server and open a session on it.");
   app->add_option("cfg", flags->cfg, "OMPL.app problem file")->required();
-  app->add_option("--out", flags->out, "Scene JSON to write (meshes referenced by path)")
-      ->required();
+  app->add_option("--out", flags->out,
+                  "Scene JSON to write (meshes referenced by path); required without --server");
   return Subcommand{.app = app, .run = [flags] { return RunImportCfg(*flags); }};
 }
 

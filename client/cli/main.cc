@@ -15,10 +15,10 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   std::vector<Subcommand> subcommands = {
       WithServer(AddMergeCommand(app), RemoteKind::kMerge),
-      AddCheckCommand(app),
+      WithServer(AddCheckCommand(app), RemoteKind::kCheck),
       WithServer(AddPlanCommand(app), RemoteKind::kPlan),
-      AddRenderCommand(app),
-      AddImportCfgCommand(app),
+      WithServer(AddRenderCommand(app), RemoteKind::kCheck),
+      WithServer(AddImportCfgCommand(app), RemoteKind::kImportCfg),
       AddRequeryCommand(app),
   };
 

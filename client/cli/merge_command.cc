@@ -154,16 +154,13 @@ int RunMerge(const MergeFlags& f) {
   if (!f.out.empty()) WriteTextFile(f.out, ToJson(MergeResultToProto(result)));
   ShortcutStep shortcut;
   if (f.shortcut) {
-    shortcut = ShortcutMergedPath(*loaded.planner, result, request.measure, resolution,
-                                  f.shortcut_seed);
+    shortcut =
+        ShortcutMergedPath(*loaded.planner, result, request.measure, resolution, f.shortcut_seed);
   }
   if (!f.out_path.empty()) WritePathsFile(f.out_path, {f.shortcut ? shortcut.path : result.path});
   if (!f.svg.empty()) {
-    RenderRequest picture = MergeRenderRequest(request.paths, result);
-    // The picture shows the path that --out-path gets.
-    if (f.shortcut) picture.merged = RenderPath{.path = shortcut.path, .quality = shortcut.quality};
-    if (f.shortcut) picture.merged->path.name = "merged + shortcut";
-    WriteTextFile(f.svg, RenderSvg(*loaded.scene, picture));
+    WriteTextFile(f.svg, RenderSvg(*loaded.scene, MergePicture(request.paths, result,
+                                                               f.shortcut ? &shortcut : nullptr)));
   }
   PrintResult(result);
   if (f.shortcut) PrintShortcutRow(shortcut, result);
@@ -217,7 +214,8 @@ Subcommand AddMergeCommand(CLI::App& parent) {
   app->add_flag("-q,--quiet", f.quiet, "No progress on stderr");
   app->add_flag("--shortcut", f.shortcut,
                 "Then shortcut the merged path with OMPL's PathSimplifier (hybridize-then-"
-                "shortcut); --out-path gets the shortcut path, --out keeps the merge's result");
+                "shortcut); --out-path and --svg get the shortcut path, --out keeps the merge's "
+                "result. With --server the shortcutting runs here, on the local scene");
   app->add_option("--shortcut-seed", f.shortcut_seed, "Seed of the shortcutting")
       ->capture_default_str();
   return Subcommand{.app = app, .run = [flags] { return RunMerge(*flags); }};

@@ -4,18 +4,21 @@
 #include <cstdio>
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "client/cli/cli_common.h"
+#include "client/cli/shortcut_step.h"
 #include "core/adapter/json_io.h"
 #include "core/adapter/merge_proto.h"
+#include "core/adapter/ompl_cfg.h"
 #include "core/adapter/path_io.h"
 #include "core/adapter/scene_proto.h"
+#include "core/common/digest.h"
 #include "core/common/error.h"
 #include "core/hgraph/bridge_candidates.h"
 #include "core/measure/measure.h"
-#include "server/digest.h"
 
 namespace hgraph::cli {
 namespace {
@@ -58,7 +61,7 @@ void Check(const grpc::Status& status, const char* method) {
 
 v1::Digest DigestOf(const std::string& bytes) {
   v1::Digest digest;
-  digest.set_sha256(server::Sha256Hex(bytes));
+  digest.set_sha256(Sha256Hex(bytes));
   digest.set_size_bytes(static_cast<int64_t>(bytes.size()));
   return digest;
 }
@@ -136,8 +139,8 @@ std::string RemoteClient::OpenSession(const v1::Digest& scene, const std::string
     get.set_name(session);
     Check(stub_->GetSession(&context, get, &out), "GetSession");
     if (out.scene().sha256() != scene.sha256()) {
-      throw InputError("--session", session + " holds another scene (sha256 " +
-                                        out.scene().sha256() + ")");
+      throw InputError("--session",
+                       session + " holds another scene (sha256 " + out.scene().sha256() + ")");
     }
     return out.name();
   }
@@ -174,6 +177,14 @@ v1::RequeryResponse RemoteClient::Requery(const v1::RequeryRequest& request) {
   Prepare(&context);
   v1::RequeryResponse response;
   Check(stub_->Requery(&context, request, &response), "Requery");
+  return response;
+}
+
+v1::CheckPathsResponse RemoteClient::CheckPaths(const v1::CheckPathsRequest& request) {
+  grpc::ClientContext context;
+  Prepare(&context);
+  v1::CheckPathsResponse response;
+  Check(stub_->CheckPaths(&context, request, &response), "CheckPaths");
   return response;
 }
 
@@ -244,10 +255,9 @@ v1::Measure MeasureFromFlags(CLI::App* app) {
 
 namespace {
 
-// Uploads the --scene file and opens the session; returns the session name and the scene.
-std::string OpenScene(RemoteClient& client, CLI::App* app, const RemoteOptions& remote,
-                      v1::Scene* scene_out) {
-  const std::string scene_file = Flag<std::string>(app, "--scene", "");
+// Uploads the scene file and opens the session; returns the session name and the scene.
+std::string OpenSceneFile(RemoteClient& client, const std::string& scene_file,
+                          const RemoteOptions& remote, v1::Scene* scene_out) {
   v1::Scene scene = ReadSceneFile(scene_file);
   *scene_out = scene;
   const v1::Digest digest = client.UploadScene(
@@ -257,15 +267,54 @@ std::string OpenScene(RemoteClient& client, CLI::App* app, const RemoteOptions& 
   return session;
 }
 
+std::string OpenScene(RemoteClient& client, CLI::App* app, const RemoteOptions& remote,
+                      v1::Scene* scene_out) {
+  return OpenSceneFile(client, Flag<std::string>(app, "--scene", ""), remote, scene_out);
+}
+
+// CheckPaths as a PathChecker: the scene is uploaded and the session opened on the first check.
+PathChecker RemotePathChecker(CLI::App* app, const RemoteOptions& remote) {
+  struct State {
+    explicit State(const RemoteOptions& remote) : client(remote.server, remote.timeout_s) {}
+    RemoteClient client;
+    std::string session;
+  };
+  auto state = std::make_shared<State>(remote);
+  return [state, app, remote](const std::vector<InputPath>& paths, const CheckSettings& settings) {
+    if (state->session.empty()) {
+      v1::Scene scene;
+      state->session = OpenScene(state->client, app, remote, &scene);
+    }
+    v1::CheckPathsRequest request;
+    request.set_session(state->session);
+    *request.mutable_paths() = PathsToProto(paths);
+    if (settings.resolution) request.set_resolution(*settings.resolution);
+    request.set_k(settings.k);
+    request.set_sampled(settings.mode == CheckMode::kSampled);
+    const v1::CheckPathsResponse response = state->client.CheckPaths(request);
+    CheckRun run{.resolution = response.resolution()};
+    for (const v1::InputReport& report : response.paths()) {
+      run.result.paths.push_back(InputReportFromProto(report));
+    }
+    run.result.collision_checks = response.collision_checks();
+    run.result.distance_queries = response.distance_queries();
+    run.result.elapsed_ms = response.elapsed_ms();
+    return run;
+  };
+}
+
 int RunRemoteMerge(CLI::App* app, const RemoteOptions& remote) {
   RemoteClient client(remote.server, remote.timeout_s);
   v1::Scene scene;
-  const std::string session = OpenScene(client, app, remote, &scene);
+  const std::string scene_file = Flag<std::string>(app, "--scene", "");
+  const std::string session = OpenSceneFile(client, scene_file, remote, &scene);
 
   v1::MergePathsRequest request;
   request.set_session(session);
   const Space space = SpaceFromProto(scene.space(), "scene.space");
-  *request.mutable_paths() = PathsToProto(LoadPathsFile(Flag<std::string>(app, "--paths", ""), space));
+  const std::vector<InputPath> paths = LoadPathsFile(Flag<std::string>(app, "--paths", ""), space);
+  *request.mutable_paths() = PathsToProto(paths);
+  double resolution = 0;
   try {
     *request.mutable_measure() = MeasureFromFlags(app);
     v1::MergeOptions* options = request.mutable_options();
@@ -283,35 +332,51 @@ int RunRemoteMerge(CLI::App* app, const RemoteOptions& remote) {
       options->set_max_node_spacing(Flag<double>(app, "--max-node-spacing", 0));
     }
     options->set_threads(Flag<int>(app, "--threads", 0));
+    // The resolution the server will use, for --shortcut here.
+    resolution = ResolutionFromProto(*options, scene);
   } catch (const Error& e) {
-    RethrowWithFlag(e, {{"measure.k", "--k"}, {"measure.safety", "--safety"}});
+    RethrowWithFlag(e, {{"measure.k", "--k"},
+                        {"measure.safety", "--safety"},
+                        {"options.resolution", "--resolution"}});
   }
 
   ProgressPrinter printer(!Flag<bool>(app, "--quiet", false));
   const ProgressCallback report = printer.callback();
-  const v1::MergePathsResponse response =
-      client.Merge(request, [&](const v1::MergeProgress& p) {
-        if (!report) return;  // --quiet
-        report(Progress{.phase = p.phase(),
-                        .done = p.done(),
-                        .total = p.total(),
-                        .collision_checks = p.collision_checks(),
-                        .distance_queries = p.distance_queries(),
-                        .elapsed_ms = p.elapsed_ms()});
-      });
+  const v1::MergePathsResponse response = client.Merge(request, [&](const v1::MergeProgress& p) {
+    if (!report) return;  // --quiet
+    report(Progress{.phase = p.phase(),
+                    .done = p.done(),
+                    .total = p.total(),
+                    .collision_checks = p.collision_checks(),
+                    .distance_queries = p.distance_queries(),
+                    .elapsed_ms = p.elapsed_ms()});
+  });
   printer.Finish();
 
   const std::string out = Flag<std::string>(app, "--out", "");
   if (!out.empty()) WriteTextFile(out, ToJson(response.result()));
+  // --shortcut and --svg need the scene, which this side holds: they run here, on the result.
+  const MergeResult result = MergeResultFromProto(response.result());
+  const bool shortcut = Flag<bool>(app, "--shortcut", false);
+  const std::string svg = Flag<std::string>(app, "--svg", "");
+  std::optional<LoadedScene> loaded;
+  ShortcutStep step;
+  if (shortcut) {
+    loaded.emplace(LoadScene(scene, scene_file, resolution));
+    step = ShortcutMergedPath(*loaded->planner, result, result.measure, resolution,
+                              Flag<uint64_t>(app, "--shortcut-seed", 1));
+  }
   const std::string out_path = Flag<std::string>(app, "--out-path", "");
-  if (!out_path.empty()) {
-    WritePathsFile(out_path, PathsFromProto([&] {
-                     v1::PathSet set;
-                     *set.add_paths() = response.result().path();
-                     return set;
-                   }()));
+  if (!out_path.empty()) WritePathsFile(out_path, {shortcut ? step.path : result.path});
+  if (!svg.empty()) {
+    const std::shared_ptr<const Scene> drawn =
+        loaded ? loaded->scene
+               : SceneFromProto(scene, std::filesystem::path(scene_file).parent_path().string(),
+                                BlobResolver());
+    WriteTextFile(svg, RenderSvg(*drawn, MergePicture(paths, result, shortcut ? &step : nullptr)));
   }
   PrintRemoteResult(response.result(), response.hgraph());
+  if (shortcut) PrintShortcutRow(step, result);
   return kExitOk;
 }
 
@@ -325,24 +390,59 @@ int RunRemotePlan(CLI::App* app, const RemoteOptions& remote) {
   request.set_time_per_path_s(Flag<double>(app, "--time", 0));
   request.set_seed(Flag<uint64_t>(app, "--seed", 1));
   request.set_simplify(Flag<bool>(app, "--simplify", false));
+  // Progress: a bar on a terminal, a line per path otherwise (stderr), as for a merge.
+  ProgressPrinter printer(!Flag<bool>(app, "--quiet", false));
+  const ProgressCallback report = printer.callback();
+  const auto started = std::chrono::steady_clock::now();
+  const auto progress = [&](int64_t done) {
+    if (!report) return;
+    report(Progress{.phase = "plan",
+                    .done = done,
+                    .total = request.count(),
+                    .elapsed_ms = std::chrono::duration<double, std::milli>(
+                                      std::chrono::steady_clock::now() - started)
+                                      .count()});
+  };
+  progress(0);
   std::vector<InputPath> paths;
   client.Plan(request, [&](const v1::PlanPathsResponse& event) {
     v1::PathSet one;
     *one.add_paths() = event.path();
     paths.push_back(PathsFromProto(one).front());
+    progress(static_cast<int64_t>(paths.size()));
+    printer.Finish();
     std::printf("%s: %d waypoints, %.1f ms\n", event.path().name().c_str(),
                 event.path().waypoints_size(), event.elapsed_ms());
     std::fflush(stdout);
   });
+  printer.Finish();
   const std::string out = Flag<std::string>(app, "--out", "");
   if (!out.empty()) WritePathsFile(out, paths);
   std::printf("%zu paths planned\n", paths.size());
   return kExitOk;
 }
 
+// The import ran here (and wrote --out if given); the scene goes to the server with its meshes
+// as blobs. It goes as the --out file will read back: JSON does not keep every bit of a message
+// (-0 reads back as 0), and a later `--session ... --scene <out>` must find the same digest.
+int RunRemoteImportCfg(CLI::App* app, const RemoteOptions& remote) {
+  const std::string cfg = Flag<std::string>(app, "cfg", "");
+  v1::Scene scene;
+  ParseJson(ToJson(ReadOmplAppProblem(cfg)), cfg, &scene);
+  RemoteClient client(remote.server, remote.timeout_s);
+  const v1::Digest digest =
+      client.UploadScene(std::move(scene), std::filesystem::path(cfg).parent_path().string());
+  const std::string session = client.OpenSession(digest, remote.session);
+  std::printf("scene sha256 %s (%lld bytes) stored on %s\n", digest.sha256().c_str(),
+              static_cast<long long>(digest.size_bytes()), remote.server.c_str());
+  std::printf("session %s\n", session.c_str());
+  return kExitOk;
+}
+
 }  // namespace
 
 Subcommand WithServer(Subcommand local, RemoteKind kind) {
+  HGRAPH_CHECK(kind != RemoteKind::kCheck || local.run_checked);
   auto remote = std::make_shared<RemoteOptions>();
   CLI::App* app = local.app;
   app->add_option("--server", remote->server,
@@ -351,9 +451,18 @@ Subcommand WithServer(Subcommand local, RemoteKind kind) {
                   "With --server: reuse this session (sessions/<id>) instead of creating one");
   app->add_option("--timeout", remote->timeout_s, "With --server: deadline per call, seconds");
   auto run_local = std::move(local.run);
-  local.run = [app, kind, remote, run_local] {
+  auto run_checked = local.run_checked;
+  local.run = [app, kind, remote, run_local, run_checked] {
     if (remote->server.empty()) return run_local();
-    return kind == RemoteKind::kMerge ? RunRemoteMerge(app, *remote) : RunRemotePlan(app, *remote);
+    switch (kind) {
+      case RemoteKind::kMerge: return RunRemoteMerge(app, *remote);
+      case RemoteKind::kPlan: return RunRemotePlan(app, *remote);
+      case RemoteKind::kCheck: return run_checked(RemotePathChecker(app, *remote));
+      case RemoteKind::kImportCfg:
+        if (Given(app, "--out")) run_local();
+        return RunRemoteImportCfg(app, *remote);
+    }
+    return kExitBadInput;
   };
   return local;
 }

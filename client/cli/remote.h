@@ -1,6 +1,8 @@
 // `--server HOST:PORT`: the CLI's subcommands run through hgraph-server instead of in process.
 // RemoteClient speaks hgraph.v1.PathMerger (uploads only the blobs the server lacks, creates or
-// reuses a session); WithServer adds --server to an in-process subcommand and dispatches.
+// reuses a session); WithServer adds --server to an in-process subcommand and dispatches. What
+// needs the engine runs on the server (merge, plan, the checks of check and render); what needs
+// only the scene file runs here (drawing, --shortcut after a remote merge, reading .cfg files).
 #pragma once
 
 #include <grpcpp/grpcpp.h>
@@ -33,6 +35,7 @@ class RemoteClient {
   v1::MergePathsResponse Merge(v1::MergePathsRequest request,
                                const std::function<void(const v1::MergeProgress&)>& on_progress);
   v1::RequeryResponse Requery(const v1::RequeryRequest& request);
+  v1::CheckPathsResponse CheckPaths(const v1::CheckPathsRequest& request);
   // Calls on_path for each path as it arrives.
   void Plan(const v1::PlanPathsRequest& request,
             const std::function<void(const v1::PlanPathsResponse&)>& on_path);
@@ -45,10 +48,17 @@ class RemoteClient {
   double timeout_s_;
 };
 
-enum class RemoteKind { kMerge, kPlan };
+// What --server does for a subcommand.
+enum class RemoteKind {
+  kMerge,      // MergePaths (streamed progress); --svg and --shortcut run here on the result
+  kPlan,       // PlanPaths (one progress line per path)
+  kCheck,      // the subcommand's run_checked with CheckPaths as its checker
+  kImportCfg,  // the local import (if --out is given), then the scene stored and a session opened
+};
 
 // Adds --server, --session and --timeout to `local`'s app; with --server set, its run goes
 // through the service (reading the subcommand's own flags by name), else runs in process.
+// kCheck requires local.run_checked.
 Subcommand WithServer(Subcommand local, RemoteKind kind);
 
 // Flags every remote call takes.

@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "client/cli/cli_common.h"
+#include "core/merge/path_check.h"
 #include "core/plan/baselines.h"
 
 namespace hgraph::cli {
@@ -16,10 +17,15 @@ ShortcutStep ShortcutMergedPath(const MotionChecker& checker, const MergeResult&
   step.path.name = "merged+shortcut";
   step.elapsed_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-  // A merge of the one path evaluates it exactly as the merge evaluated its inputs.
-  const MergeResult evaluated =
-      Merge(checker, MergeRequest{.paths = {step.path}, .measure = measure});
-  step.quality = evaluated.inputs.at(0).quality;
+  // Evaluated exactly as the merge evaluated its inputs.
+  const PathCheckResult evaluated =
+      CheckPaths(checker, PathCheckRequest{.paths = {step.path}, .k = measure.k});
+  const InputReport& report = evaluated.paths.at(0);
+  if (!report.valid) {
+    throw Error(ErrorCode::kFailedPrecondition, "--shortcut",
+                "the shortcut path fails the check a merge runs: " + report.invalid_reason);
+  }
+  step.quality = report.quality;
   return step;
 }
 
@@ -32,6 +38,16 @@ void PrintShortcutRow(const ShortcutStep& step, const MergeResult& result) {
   std::printf("shortcut (OMPL PathSimplifier, %.1f ms): objective %s after the merge's %s\n",
               step.elapsed_ms, Cell(Objective(result.measure, q), 0).c_str(),
               Cell(result.objective, 0).c_str());
+}
+
+RenderRequest MergePicture(const std::vector<InputPath>& inputs, const MergeResult& result,
+                           const ShortcutStep* shortcut) {
+  RenderRequest picture = MergeRenderRequest(inputs, result);
+  if (shortcut != nullptr) {
+    picture.merged = RenderPath{.path = shortcut->path, .quality = shortcut->quality};
+    picture.merged->path.name = "merged + shortcut";
+  }
+  return picture;
 }
 
 }  // namespace hgraph::cli

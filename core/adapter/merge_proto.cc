@@ -148,19 +148,60 @@ v1::PathQuality QualityToProto(const PathQuality& quality) {
   return proto;
 }
 
+PathQuality QualityFromProto(const v1::PathQuality& proto, bool has_clearance) {
+  return PathQuality{.length = proto.length(),
+                     .min_clearance = proto.min_clearance(),
+                     .avg_clearance = proto.avg_clearance(),
+                     .inverse_clearance = proto.inverse_clearance(),
+                     .k = proto.k(),
+                     .has_clearance = has_clearance};
+}
+
+v1::InputReport InputReportToProto(const InputReport& report) {
+  v1::InputReport proto;
+  proto.set_name(report.name);
+  proto.set_valid(report.valid);
+  proto.set_invalid_edge(report.invalid_edge);
+  proto.set_invalid_reason(report.invalid_reason);
+  *proto.mutable_quality() = QualityToProto(report.quality);
+  proto.set_waypoints(report.waypoints);
+  proto.set_invalid_at(report.invalid_at);
+  switch (report.invalid_cause) {
+    case InvalidCause::kNone: proto.set_invalid_cause(v1::InputReport::CAUSE_UNSPECIFIED); break;
+    case InvalidCause::kCollision: proto.set_invalid_cause(v1::InputReport::CAUSE_COLLISION); break;
+    case InvalidCause::kOutOfBounds:
+      proto.set_invalid_cause(v1::InputReport::CAUSE_OUT_OF_BOUNDS);
+      break;
+  }
+  proto.set_certified(report.certified);
+  return proto;
+}
+
+InputReport InputReportFromProto(const v1::InputReport& proto) {
+  InputReport report{.name = proto.name(),
+                     .valid = proto.valid(),
+                     .invalid_edge = proto.invalid_edge(),
+                     .invalid_reason = proto.invalid_reason(),
+                     .quality = QualityFromProto(
+                         proto.quality(), proto.valid() && proto.quality().min_clearance() > 0),
+                     .waypoints = proto.waypoints(),
+                     .invalid_at = proto.invalid_at(),
+                     .certified = proto.certified()};
+  switch (proto.invalid_cause()) {
+    case v1::InputReport::CAUSE_COLLISION: report.invalid_cause = InvalidCause::kCollision; break;
+    case v1::InputReport::CAUSE_OUT_OF_BOUNDS:
+      report.invalid_cause = InvalidCause::kOutOfBounds;
+      break;
+    default: report.invalid_cause = InvalidCause::kNone; break;
+  }
+  return report;
+}
+
 v1::MergeResult MergeResultToProto(const MergeResult& result) {
   v1::MergeResult proto;
   *proto.mutable_path() = PathToProto(result.path);
   *proto.mutable_quality() = QualityToProto(result.quality);
-  for (const InputReport& input : result.inputs) {
-    v1::InputReport* out = proto.add_inputs();
-    out->set_name(input.name);
-    out->set_valid(input.valid);
-    out->set_invalid_edge(input.invalid_edge);
-    out->set_invalid_reason(input.invalid_reason);
-    *out->mutable_quality() = QualityToProto(input.quality);
-    out->set_waypoints(input.waypoints);
-  }
+  for (const InputReport& input : result.inputs) *proto.add_inputs() = InputReportToProto(input);
   const MergeStats& s = result.stats;
   v1::MergeStats* stats = proto.mutable_stats();
   stats->set_nodes(s.nodes);
@@ -196,6 +237,49 @@ v1::MergeResult MergeResultToProto(const MergeResult& result) {
   proto.set_objective(result.objective);
   proto.set_best_input_objective(result.best_input_objective);
   return proto;
+}
+
+MergeResult MergeResultFromProto(const v1::MergeResult& proto) {
+  MergeResult result;
+  v1::PathSet one;
+  *one.add_paths() = proto.path();
+  result.path = PathsFromProto(one).front();
+  result.quality = QualityFromProto(proto.quality(), true);
+  for (const v1::InputReport& input : proto.inputs()) {
+    result.inputs.push_back(InputReportFromProto(input));
+  }
+  const v1::MergeStats& s = proto.stats();
+  result.stats = MergeStats{.nodes = s.nodes(),
+                            .input_edges = s.input_edges(),
+                            .input_edges_invalid = s.input_edges_invalid(),
+                            .candidate_edges = s.candidate_edges(),
+                            .edges_checked = s.edges_checked(),
+                            .edges_valid = s.edges_valid(),
+                            .collision_checks = s.collision_checks(),
+                            .distance_queries = s.distance_queries(),
+                            .edges_reused = s.edges_reused(),
+                            .threads = s.threads(),
+                            .alignments = s.alignments(),
+                            .radius = s.radius(),
+                            .gap_init = s.gap_init(),
+                            .gap_extend = s.gap_extend()};
+  const v1::Timing& t = proto.timing();
+  result.timing = MergeTiming{.validate_ms = t.validate_ms(),
+                              .inputs_ms = t.inputs_ms(),
+                              .align_ms = t.align_ms(),
+                              .candidates_ms = t.candidates_ms(),
+                              .check_ms = t.check_ms(),
+                              .search_ms = t.search_ms(),
+                              .evaluate_ms = t.evaluate_ms(),
+                              .total_ms = t.total_ms()};
+  result.source_path.assign(proto.source_path().begin(), proto.source_path().end());
+  result.source_index.assign(proto.source_index().begin(), proto.source_index().end());
+  result.measure = MeasureFromProto(proto.measure());
+  result.variant = VariantFromProto(proto.variant());
+  result.best_input = proto.best_input();
+  result.objective = proto.objective();
+  result.best_input_objective = proto.best_input_objective();
+  return result;
 }
 
 }  // namespace hgraph

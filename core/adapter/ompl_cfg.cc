@@ -109,12 +109,17 @@ Eigen::Matrix3d AssimpUpAxisRotation(const std::string& mesh_path) {
   return r;
 }
 
+// -0 becomes 0. Proto3 JSON writes -0 but reads it back as 0, so a scene holding -0 would get
+// another digest once written to a file and read again (a session opened on the imported problem
+// would not match its own --out file).
+double NoNegativeZero(double v) { return v + 0.0; }
+
 void SetPose(const Eigen::Isometry3d& pose, v1::Pose* proto) {
   const Eigen::Quaterniond q(pose.linear());
   proto->clear_position();
   proto->clear_orientation();
-  for (int k = 0; k < 3; ++k) proto->add_position(pose.translation()[k]);
-  for (double v : {q.x(), q.y(), q.z(), q.w()}) proto->add_orientation(v);
+  for (int k = 0; k < 3; ++k) proto->add_position(NoNegativeZero(pose.translation()[k]));
+  for (double v : {q.x(), q.y(), q.z(), q.w()}) proto->add_orientation(NoNegativeZero(v));
 }
 
 // The mesh file named by `key`, as written and as found (relative to the .cfg's folder).
@@ -138,13 +143,13 @@ MeshFile FindMesh(const ProblemSection& problem, const std::string& key, const f
 void AddConfig(const ProblemSection& problem, const std::string& prefix, bool three_d,
                v1::Configuration* out) {
   const double theta = problem.Number(prefix + ".theta", 0.0);
-  out->add_values(problem.Number(prefix + ".x"));
-  out->add_values(problem.Number(prefix + ".y"));
+  out->add_values(NoNegativeZero(problem.Number(prefix + ".x")));
+  out->add_values(NoNegativeZero(problem.Number(prefix + ".y")));
   if (!three_d) {
-    out->add_values(theta);
+    out->add_values(NoNegativeZero(theta));
     return;
   }
-  out->add_values(problem.Number(prefix + ".z"));
+  out->add_values(NoNegativeZero(problem.Number(prefix + ".z")));
   Eigen::Vector3d axis(problem.Number(prefix + ".axis.x", 0.0),
                        problem.Number(prefix + ".axis.y", 0.0),
                        problem.Number(prefix + ".axis.z", 0.0));
@@ -155,7 +160,7 @@ void AddConfig(const ProblemSection& problem, const std::string& prefix, bool th
     throw InputError(problem.Field(prefix + ".axis.x"),
                      "the rotation axis is zero but " + prefix + ".theta is not");
   }
-  for (double v : {q.x(), q.y(), q.z(), q.w()}) out->add_values(v);
+  for (double v : {q.x(), q.y(), q.z(), q.w()}) out->add_values(NoNegativeZero(v));
 }
 
 }  // namespace
@@ -222,8 +227,8 @@ v1::Scene ReadOmplAppProblem(const std::string& cfg_path) {
       throw InputError(problem.Field(std::string("volume.max.") + axes[k]),
                        "must exceed volume.min." + std::string(axes[k]));
     }
-    component->add_lower(low);
-    component->add_upper(high);
+    component->add_lower(NoNegativeZero(low));
+    component->add_upper(NoNegativeZero(high));
   }
   AddConfig(problem, "start", three_d, scene.mutable_start());
   AddConfig(problem, "goal", three_d, scene.mutable_goal());

@@ -39,15 +39,15 @@ HGraph::HGraph(const Space& space, std::vector<InputPath> paths, double endpoint
     if (ds > endpoint_tolerance) {
       throw InputError(field + ".waypoints[0]",
                        "path '" + path.name + "' starts " + std::to_string(ds) +
-                           " away from the start of path '" + paths_[0].name +
-                           "' (tolerance " + std::to_string(endpoint_tolerance) + ")");
+                           " away from the start of path '" + paths_[0].name + "' (tolerance " +
+                           std::to_string(endpoint_tolerance) + ")");
     }
     const double dg = space.Distance(path.waypoints.back(), goal);
     if (dg > endpoint_tolerance) {
       throw InputError(field + ".waypoints[" + std::to_string(path.waypoints.size() - 1) + "]",
                        "path '" + path.name + "' ends " + std::to_string(dg) +
-                           " away from the goal of path '" + paths_[0].name +
-                           "' (tolerance " + std::to_string(endpoint_tolerance) + ")");
+                           " away from the goal of path '" + paths_[0].name + "' (tolerance " +
+                           std::to_string(endpoint_tolerance) + ")");
     }
   }
 
@@ -76,10 +76,9 @@ HGraph::HGraph(const Space& space, std::vector<InputPath> paths, double endpoint
       // to stay under it.
       if (parts > kMaxPartsPerEdge) {
         throw InputError("options.max_node_spacing",
-                         std::to_string(max_node_spacing) + " would cut edge " +
-                             std::to_string(j) + " of path '" + paths_[p].name + "' (length " +
-                             std::to_string(length) + ") into more than " +
-                             std::to_string(kMaxPartsPerEdge) + " parts");
+                         std::to_string(max_node_spacing) + " would cut edge " + std::to_string(j) +
+                             " of path '" + paths_[p].name + "' (length " + std::to_string(length) +
+                             ") into more than " + std::to_string(kMaxPartsPerEdge) + " parts");
       }
       for (int k = 1; k < static_cast<int>(parts); ++k) {
         const double t = k / parts;

@@ -12,6 +12,7 @@
 #include <mutex>
 
 #include "core/common/error.h"
+#include "core/merge/path_check.h"
 #include "core/search/search.h"
 
 namespace hgraph {
@@ -63,13 +64,53 @@ class ProgressReporter {
   int64_t queries_at_start_;
 };
 
+// A stretch of an input edge in the H-Graph: the edge's report, whether the H-Graph edge runs
+// against the input's direction, and the part [t0, t1] of the input edge it covers.
+struct EdgePart {
+  const EdgeReport* report = nullptr;
+  bool reversed = false;
+  double t0 = 0;
+  double t1 = 1;
+};
+
+// The report of a whole input edge from its parts, in order along the input: profiles and the
+// first invalid point mapped onto the input edge's parameter, counts and lengths summed.
+EdgeReport JoinParts(const std::vector<EdgePart>& parts) {
+  EdgeReport out;
+  out.state = EdgeState::kValid;
+  out.has_clearance = true;
+  out.certified = true;
+  for (const EdgePart& part : parts) {
+    const EdgeReport& r = *part.report;
+    const auto map = [&](double t) {
+      return part.t0 + (part.reversed ? 1 - t : t) * (part.t1 - part.t0);
+    };
+    out.length += r.length;
+    out.collision_checks += r.collision_checks;
+    out.distance_queries += r.distance_queries;
+    out.certified = out.certified && r.certified;
+    out.has_clearance = out.has_clearance && r.has_clearance;
+    if (out.state == EdgeState::kValid && r.state != EdgeState::kValid) {
+      out.state = r.state;
+      out.invalid_at = r.invalid_at >= 0 ? map(r.invalid_at) : -1;
+    }
+    if (!r.has_clearance) continue;
+    const size_t first = out.profile.size();
+    for (const ClearanceSample& sample : r.profile) {
+      out.profile.push_back({.t = map(sample.t), .clearance = sample.clearance});
+    }
+    if (part.reversed) std::reverse(out.profile.begin() + first, out.profile.end());
+  }
+  if (!out.has_clearance || out.state != EdgeState::kValid) out.profile.clear();
+  if (out.state != EdgeState::kValid) out.has_clearance = false;
+  return out;
+}
+
 }  // namespace
 
 HybridizationSession::HybridizationSession(const MotionChecker& checker,
                                            const MergeRequest& request)
-    : checker_(&checker),
-      options_(request.options),
-      graph_(([&]() -> HGraph {
+    : checker_(&checker), options_(request.options), graph_(([&]() -> HGraph {
         ValidateMeasure(request.measure);
         ValidateCandidateOptions(request.options.candidates);
         ResolveThreads(request.options.threads);
@@ -95,8 +136,7 @@ HybridizationSession::HybridizationSession(const MotionChecker& checker,
 
   phase = Clock::now();
   request.cancel.ThrowIfStopped();
-  const CandidateSet candidates =
-      BridgeCandidates(graph_, checker.space(), options_.candidates);
+  const CandidateSet candidates = BridgeCandidates(graph_, checker.space(), options_.candidates);
   const bool aligned = options_.candidates.variant == Variant::kEditDistance ||
                        options_.candidates.variant == Variant::kEditDistanceNeighborhood;
   (aligned ? build_timing_.align_ms : build_timing_.candidates_ms) = MsSince(phase);
@@ -139,11 +179,10 @@ void HybridizationSession::CheckEdges(const std::vector<int>& edge_ids, bool nee
                           HEdge& edge = graph_.mutable_edge(edge_ids[k]);
                           const EdgeReport previous = std::move(edge.report);
                           edge.report = checker_->CheckEdge(
-                              EdgeCheckRequest{
-                                  .from = &graph_.node(edge.u).q,
-                                  .to = &graph_.node(edge.v).q,
-                                  .need_clearance = need_clearance,
-                                  .known_valid = previous.state == EdgeState::kValid});
+                              EdgeCheckRequest{.from = &graph_.node(edge.u).q,
+                                               .to = &graph_.node(edge.v).q,
+                                               .need_clearance = need_clearance,
+                                               .known_valid = previous.state == EdgeState::kValid});
                           // A re-check for clearance keeps counting what the first check cost.
                           if (previous.state != EdgeState::kUnchecked) {
                             edge.report.collision_checks += previous.collision_checks;
@@ -209,8 +248,7 @@ MergeResult HybridizationSession::Query(const MeasureSpec& measure,
     if (!best.found) {
       if (measure.type == MeasureType::kSafeLength) {
         throw Error(ErrorCode::kFailedPrecondition, "measure.safety",
-                    "no path in the H-Graph keeps clearance >= " +
-                        std::to_string(measure.safety));
+                    "no path in the H-Graph keeps clearance >= " + std::to_string(measure.safety));
       }
       throw Error(ErrorCode::kFailedPrecondition, "paths",
                   "the valid edges of the H-Graph do not connect start and goal (are the "
@@ -249,43 +287,36 @@ MergeResult HybridizationSession::Query(const MeasureSpec& measure,
   // Every input, under every measure, from the reports stored on its edges.
   PathQuality best_quality;
   for (int p = 0; p < graph_.num_paths(); ++p) {
-    const InputPath& path = graph_.path(p);
+    const InputPath& input = graph_.path(p);
     const std::vector<int>& ids = graph_.path_nodes(p);
-    InputReport report{.name = path.name,
-                       .valid = true,
-                       .waypoints = static_cast<int>(path.waypoints.size())};
-    std::vector<int> edges;
-    double length = 0;
+    // One report per edge of the input (from waypoint j to j + 1), joined from the H-Graph edges
+    // subdivision cut it into; nullptr where the input does not move in the H-Graph.
+    std::vector<std::vector<EdgePart>> parts(std::max<size_t>(input.waypoints.size(), 2) - 1);
     for (size_t j = 0; j + 1 < ids.size(); ++j) {
       if (ids[j] == ids[j + 1]) continue;
       const int e = graph_.FindEdge(ids[j], ids[j + 1]);
       HGRAPH_CHECK(e >= 0);
-      const EdgeReport& edge = graph_.edge(e).report;
-      length += edge.length;
-      edges.push_back(e);
-      if (report.valid && edge.state != EdgeState::kValid) {
-        // Name the input's own edge and the fraction along it, also where subdivision split it.
-        const HNode& from = graph_.node(ids[j]);
-        const HNode& to = graph_.node(ids[j + 1]);
-        const double t1 = to.t > 0 ? to.t : 1.0;
-        const double t = from.t + std::max(0.0, edge.invalid_at) * (t1 - from.t);
-        report.valid = false;
-        report.invalid_edge = from.index;
-        report.invalid_reason = "edge " + std::to_string(from.index) + " -> " +
-                                std::to_string(from.index + 1) + " is invalid at t=" +
-                                std::to_string(t);
-      }
+      const HNode& from = graph_.node(ids[j]);
+      const HNode& to = graph_.node(ids[j + 1]);
+      // The shared start and goal nodes carry path 0's indices.
+      const int index = j == 0 ? 0 : from.index;
+      const double t1 = (j + 2 == ids.size() || to.t == 0) ? 1.0 : to.t;
+      parts[index].push_back(EdgePart{.report = &graph_.edge(e).report,
+                                      .reversed = graph_.edge(e).u != ids[j],
+                                      .t0 = j == 0 ? 0.0 : from.t,
+                                      .t1 = t1});
     }
-    if (report.valid) {
-      report.quality = EvaluateEdges(graph_, edges, measure.k);
-      if (result.best_input < 0 || Better(measure, report.quality, best_quality)) {
-        result.best_input = p;
-        best_quality = report.quality;
-      }
-    } else {
-      report.quality.k = measure.k;
-      report.quality.length = length;
-      report.quality.min_clearance = 0;
+    std::vector<EdgeReport> joined(parts.size());
+    std::vector<const EdgeReport*> edges(parts.size(), nullptr);
+    for (size_t j = 0; j < parts.size(); ++j) {
+      if (parts[j].empty()) continue;
+      joined[j] = JoinParts(parts[j]);
+      edges[j] = &joined[j];
+    }
+    InputReport report = ReportInputPath(checker_->space(), graph_.path(p), edges, measure.k);
+    if (report.valid && (result.best_input < 0 || Better(measure, report.quality, best_quality))) {
+      result.best_input = p;
+      best_quality = report.quality;
     }
     result.inputs.push_back(std::move(report));
   }

@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """Integration tests of the hgraph CLI: runs the real binary on the OMPL circles problem and on
-bad inputs. Usage: cli_test.py --hgraph BIN --data tests/data --work DIR CASE, or --list.
+bad inputs, in process and through a real hgraph-server on a loopback port (--server).
+Usage: cli_test.py --hgraph BIN [--server-bin BIN] --data tests/data --work DIR CASE, or --list.
 
 Exit codes under test: 0 success, 1 `check` found an invalid edge, 2 bad input with one
 "error: <field>: <problem>" line on stderr.
@@ -8,9 +9,12 @@ Exit codes under test: 0 success, 1 `check` found an invalid edge, 2 bad input w
 import argparse
 import json
 import pathlib
+import re
 import shutil
+import signal
 import subprocess
 import sys
+import threading
 
 CASES = {}
 
@@ -24,18 +28,63 @@ class Failure(Exception):
     pass
 
 
+class Skip(Exception):
+    """The case needs something this build does not have (CTest's SKIP_RETURN_CODE)."""
+
+
+SKIP_RETURN_CODE = 77
+
+
 def expect(condition, message):
     if not condition:
         raise Failure(message)
 
 
+class Server:
+    """hgraph-server on 127.0.0.1, a port it picks itself; a context manager that stops it with
+    SIGTERM and expects exit 0."""
+
+    def __init__(self, binary):
+        if not binary:
+            raise Skip("this case needs hgraph-server (--server-bin)")
+        self.proc = subprocess.Popen(
+            [binary, "--listen", "127.0.0.1:0", "--metrics-listen", "", "--threads", "2",
+             "--drain-s", "0"],
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        line = self.proc.stdout.readline()
+        match = re.search(r"grpc_port=(\d+)", line)
+        if not match:
+            self.proc.kill()
+            raise Failure("server did not start: %r %s" % (line, self.proc.stderr.read()))
+        self.target = "127.0.0.1:%s" % match.group(1)
+        self.log = []
+        threading.Thread(target=lambda: self.log.extend(self.proc.stderr), daemon=True).start()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.proc.send_signal(signal.SIGTERM)
+        try:
+            code = self.proc.wait(timeout=30)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            raise Failure("server ignored SIGTERM")
+        if exc[0] is None:
+            expect(code == 0, "server exited %d: %s" % (code, "".join(self.log)))
+
+
 class Env:
-    def __init__(self, hgraph, data, work):
+    def __init__(self, hgraph, data, work, server_bin=None):
         self.hgraph = hgraph
         self.data = data
         self.work = work
+        self.server_bin = server_bin
         self.scene = str(data / "circles" / "scene.json")
         self.paths = str(data / "circles" / "paths.txt")
+
+    def server(self):
+        return Server(self.server_bin)
 
     def run(self, *args):
         cmd = [self.hgraph, *[str(a) for a in args]]
@@ -283,10 +332,164 @@ def error_bad_flags(env):
     expect(proc.returncode == 2, "unknown subcommand should exit 2, got %d" % proc.returncode)
 
 
+def through_disc(env):
+    """The first OMPL path, and a path straight through disc6 (centre 39, 44.5, radius 6)."""
+    paths = env.circle_paths()
+    return env.write("through.json", {"paths": [
+        {"name": "ok", "waypoints": [{"values": q} for q in paths[0]]},
+        {"name": "through", "waypoints": [{"values": q} for q in
+                                          [[30.0, 44.5], [31.0, 44.5], [48.0, 44.5]]]}]})
+
+
+@case
+def check_prints_length_and_clearance(env):
+    proc = env.run("check", "--scene", env.scene, "--paths", env.paths)
+    expect(proc.returncode == 0, "check failed: exit %d" % proc.returncode)
+    lines = [l for l in proc.stdout.splitlines() if l.startswith("path ")]
+    expect(len(lines) == 2, "expected one line per path: %r" % lines)
+    for line in lines:
+        expect(re.search(r": valid, \d+ waypoints, length [0-9.]+, min clearance 0\.[0-9]+", line),
+               "no length and min clearance: %r" % line)
+    expect("2 of 2 paths valid (certified check" in proc.stdout, "no summary")
+    sampled = env.run("check", "--scene", env.scene, "--paths", env.paths, "--sampled")
+    expect(sampled.returncode == 0, "check --sampled failed")
+    expect("(sampled check" in sampled.stdout and "0 distance queries" in sampled.stdout,
+           "--sampled ran distance queries")
+
+
+@case
+def check_rejects_what_merge_rejects(env):
+    # At resolution 0.05 (steps of 5.66) this edge is sampled at x = 32, 37.5 and 43, all free;
+    # between 37.5 and 43 it cuts the disc at (40, 60) of radius 2, 1 from its centre. The
+    # sampled check passes it; the certified check, like a merge, finds the collision.
+    pathset = env.write("graze.json", {"paths": [
+        {"name": "graze", "waypoints": [{"values": [32.0, 61.0]}, {"values": [43.0, 61.0]}]}]})
+    sampled = env.run("check", "--scene", env.scene, "--paths", pathset, "--resolution", "0.05",
+                      "--sampled")
+    expect(sampled.returncode == 0, "the sampled check should pass it: exit %d" % sampled.returncode)
+    certified = env.run("check", "--scene", env.scene, "--paths", pathset, "--resolution", "0.05")
+    expect(certified.returncode == 1, "the certified check should reject it: exit %d"
+           % certified.returncode)
+    expect("path 'graze' (index 0): edge 0 -> 1 is in collision at t=" in certified.stdout,
+           "invalid edge not named")
+    merged = env.run("merge", "--scene", env.scene, "--paths", pathset, "--resolution", "0.05",
+                     "--out", "r.json", "-q")
+    expect(merged.returncode == 2, "a merge of the one invalid path should fail: exit %d"
+           % merged.returncode)
+
+
+@case
+def check_server_same_lines_and_exit_codes(env):
+    with env.server() as server:
+        for paths, code in ((env.paths, 0), (through_disc(env), 1)):
+            local = env.run("check", "--scene", env.scene, "--paths", paths)
+            remote = env.run("check", "--server", server.target, "--scene", env.scene,
+                             "--paths", paths)
+            expect(local.returncode == code, "in process: exit %d" % local.returncode)
+            expect(remote.returncode == code, "--server: exit %d" % remote.returncode)
+            expect(remote.stdout == local.stdout,
+                   "--server printed other lines:\n%s\nvs\n%s" % (remote.stdout, local.stdout))
+            expect("session sessions/" in remote.stderr, "no session on stderr")
+        expect("path 'through' (index 1): edge 1 -> 2 is in collision at t=" in remote.stdout,
+               "invalid edge not named")
+        session = re.search(r"session (sessions/\S+)", remote.stderr).group(1)
+        again = env.run("check", "--server", server.target, "--session", session, "--scene",
+                        env.scene, "--paths", env.paths, "--sampled")
+        expect(again.returncode == 0 and "session " + session in again.stderr,
+               "--session was not reused")
+        expect("(sampled check" in again.stdout, "--sampled not passed on")
+
+
+@case
+def check_server_unknown_session(env):
+    with env.server() as server:
+        proc = env.run("check", "--server", server.target, "--session", "sessions/" + "0" * 32,
+                       "--scene", env.scene, "--paths", env.paths)
+        expect(proc.returncode == 2, "expected exit 2, got %d" % proc.returncode)
+        expect("NOT_FOUND" in proc.stderr, "no NOT_FOUND: %r" % proc.stderr)
+
+
+@case
+def render_server_equals_in_process(env):
+    with env.server() as server:
+        env.run("render", "--scene", env.scene, "--paths", through_disc(env), "--svg", "local.svg")
+        proc = env.run("render", "--server", server.target, "--scene", env.scene, "--paths",
+                       through_disc(env), "--svg", "remote.svg")
+        expect(proc.returncode == 0, "render --server failed: exit %d" % proc.returncode)
+    local = (env.work / "local.svg").read_text()
+    remote = (env.work / "remote.svg").read_text()
+    expect(remote == local, "the SVGs differ")
+    # The legend has the valid path's length and clearance and marks the invalid one.
+    expect(re.search(r">ok<.*?length [0-9.]+<.*?min clearance [0-9.]+<", local, re.S),
+           "legend lacks the clearance of 'ok'")
+    expect(">through (invalid)<" in local, "the invalid path is not marked")
+
+
+@case
+def merge_server_svg_and_shortcut(env):
+    with env.server() as server:
+        local = env.run("merge", "--scene", env.scene, "--paths", env.paths, "--svg", "local.svg",
+                        "-q")
+        expect(local.returncode == 0, "merge failed")
+        remote = env.run("merge", "--server", server.target, "--scene", env.scene, "--paths",
+                         env.paths, "--svg", "remote.svg", "-q")
+        expect(remote.returncode == 0, "merge --server --svg failed: exit %d" % remote.returncode)
+        expect((env.work / "remote.svg").read_text() == (env.work / "local.svg").read_text(),
+               "merge --server --svg drew another picture than the in-process merge")
+        short = env.run("merge", "--server", server.target, "--scene", env.scene, "--paths",
+                        env.paths, "--shortcut", "--svg", "short.svg", "--out-path", "short.txt",
+                        "-q")
+        expect(short.returncode == 0, "merge --server --shortcut failed: exit %d" % short.returncode)
+        expect("merged+shortcut" in short.stdout and "shortcut (OMPL PathSimplifier" in short.stdout,
+               "no shortcut row")
+        expect("merged + shortcut" in (env.work / "short.svg").read_text(),
+               "the picture does not show the shortcut path")
+        proc = env.run("check", "--server", server.target, "--scene", env.scene, "--paths",
+                       "short.txt")
+        expect(proc.returncode == 0, "the shortcut path fails check")
+
+
+@case
+def import_cfg_server_then_merge_in_session(env):
+    problem = env.work / "ompl_app"
+    shutil.copytree(env.data / "ompl_app", problem)
+    cfg = problem / "wall_planar.cfg"
+    proc = env.run("import-cfg", cfg)
+    env.expect_bad_input(proc, "--out")
+    with env.server() as server:
+        imported = env.run("import-cfg", cfg, "--server", server.target, "--out", "scene.json")
+        expect(imported.returncode == 0, "import-cfg --server failed: exit %d" % imported.returncode)
+        expect((env.work / "scene.json").exists(), "--out not written")
+        expect(re.search(r"^scene sha256 [0-9a-f]{64} \(\d+ bytes\)", imported.stdout, re.M),
+               "no scene digest")
+        session = re.search(r"^session (sessions/[0-9a-f]{32})$", imported.stdout, re.M).group(1)
+        # The session holds the scene the JSON file describes: every later call reuses it.
+        planned = env.run("plan", "--server", server.target, "--session", session, "--scene",
+                          "scene.json", "--count", 3, "--planner", "prm", "--time", 1, "--seed", 7,
+                          "--out", "inputs.json")
+        expect(planned.returncode == 0, "plan --server --session failed")
+        expect("[plan" in planned.stderr, "plan --server printed no progress")
+        merged = env.run("merge", "--server", server.target, "--session", session, "--scene",
+                         "scene.json", "--paths", "inputs.json", "--out-path", "merged.path",
+                         "--svg", "merged.svg", "-q")
+        expect(merged.returncode == 0, "merge --server --session failed: exit %d"
+               % merged.returncode)
+        expect("session " + session in merged.stderr, "the session was not reused")
+        expect("<svg" in (env.work / "merged.svg").read_text(), "no SVG")
+        checked = env.run("check", "--server", server.target, "--session", session, "--scene",
+                          cfg, "--paths", "merged.path")
+        expect(checked.returncode == 0, "the merged path fails check in the session")
+        # Without --out the scene is only stored.
+        again = env.run("import-cfg", cfg, "--server", server.target)
+        expect(again.returncode == 0 and "session sessions/" in again.stdout,
+               "import-cfg --server without --out failed")
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--list", action="store_true")
     parser.add_argument("--hgraph")
+    parser.add_argument("--server-bin")
     parser.add_argument("--data")
     parser.add_argument("--work")
     parser.add_argument("case", nargs="?")
@@ -300,12 +503,16 @@ def main():
     work = pathlib.Path(args.work).resolve() / args.case
     shutil.rmtree(work, ignore_errors=True)
     work.mkdir(parents=True)
-    env = Env(str(pathlib.Path(args.hgraph).resolve()), pathlib.Path(args.data).resolve(), work)
+    env = Env(str(pathlib.Path(args.hgraph).resolve()), pathlib.Path(args.data).resolve(), work,
+              str(pathlib.Path(args.server_bin).resolve()) if args.server_bin else None)
     try:
         CASES[args.case](env)
     except Failure as e:
         print("FAIL %s: %s" % (args.case, e), file=sys.stderr)
         return 1
+    except Skip as e:
+        print("SKIP %s: %s" % (args.case, e))
+        return SKIP_RETURN_CODE
     print("PASS", args.case)
     return 0
 

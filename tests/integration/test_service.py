@@ -31,9 +31,11 @@ class Server:
 
     def __init__(self, *flags):
         threads = [] if "--threads" in flags else ["--threads", "2"]
+        # No drain on SIGTERM unless a test asks for one: stopping servers stays quick.
+        drain = [] if "--drain-s" in flags else ["--drain-s", "0"]
         self.proc = subprocess.Popen(
             [SERVER, "--listen", "127.0.0.1:0", "--metrics-listen", "127.0.0.1:0", *threads,
-             *flags],
+             *drain, *flags],
             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         line = self.proc.stdout.readline()
         match = re.search(r"grpc_port=(\d+) metrics_port=(\d+)", line)
@@ -272,6 +274,70 @@ def test_over_limit_batch_and_bad_values(client):
     assert "measure.safety" in e.value.message
 
 
+def test_check_paths_reports_what_merge_reports(client):
+    merged = client.merge(input_paths(), measure="inverse-clearance", k=2).result
+    checked = client.check(input_paths(), k=2)
+    assert checked.valid and len(checked.paths) == 2
+    assert checked.collision_checks > 0 and checked.distance_queries > 0
+    assert checked.resolution == pytest.approx(0.001)  # the scene's
+    for mine, theirs in zip(checked.paths, merged.inputs):
+        assert mine.name == theirs.name
+        assert mine.certified == theirs.certified
+        assert mine.quality == theirs.quality  # bit for bit: the same check
+
+    # Straight through disc6 (centre 39, 44.5, radius 6), and a path leaving the bounds; the
+    # paths need not share endpoints, and one waypoint is enough.
+    bad = client.check([[[30.0, 44.5], [31.0, 44.5], [48.0, 44.5]],
+                        [[70.0, 10.0], [79.0, 10.0], [90.0, 10.0]],
+                        [[1.0, 1.0]]])
+    assert not bad.valid
+    through, out, point = bad.paths
+    assert not through.valid and through.invalid_edge == 1
+    assert through.invalid_cause == merge_pb2.InputReport.CAUSE_COLLISION
+    assert 0 <= through.invalid_at <= 1
+    assert through.invalid_reason.startswith("edge 1 -> 2 is in collision at t=")
+    assert through.quality.length == pytest.approx(18.0)
+    assert not out.valid and out.invalid_edge == 1
+    assert out.invalid_cause == merge_pb2.InputReport.CAUSE_OUT_OF_BOUNDS
+    assert "leaves the space's bounds" in out.invalid_reason
+    assert point.valid and point.waypoints == 1 and point.quality.min_clearance > 0
+
+    sampled = client.check(input_paths(), sampled=True)
+    assert sampled.valid and sampled.distance_queries == 0
+    assert not any(p.certified for p in sampled.paths)
+
+
+def test_check_paths_errors_name_the_field(client):
+    paths = [[list(q.values) for q in p.waypoints] for p in input_paths().paths]
+    paths[1][3] = [float("nan"), 1.0]
+    with pytest.raises(hgraph_client.HgraphError) as e:
+        client.check(paths)
+    assert e.value.code == grpc.StatusCode.INVALID_ARGUMENT
+    assert "paths.paths[1].waypoints[3]" in e.value.message
+    paths[1][3] = [1.0, 2.0, 3.0]
+    with pytest.raises(hgraph_client.HgraphError) as e:
+        client.check(paths)
+    assert e.value.code == grpc.StatusCode.INVALID_ARGUMENT
+    assert "paths.paths[1].waypoints[3]" in e.value.message and "coordinates" in e.value.message
+    with pytest.raises(hgraph_client.HgraphError) as e:
+        client.check([])
+    assert e.value.code == grpc.StatusCode.INVALID_ARGUMENT and "paths.paths" in e.value.message
+    with pytest.raises(hgraph_client.HgraphError) as e:
+        client.check(input_paths(), resolution=-0.5)
+    assert e.value.code == grpc.StatusCode.INVALID_ARGUMENT and "resolution" in e.value.message
+    with pytest.raises(hgraph_client.HgraphError) as e:
+        client.check(input_paths(), k=-1)
+    assert e.value.code == grpc.StatusCode.INVALID_ARGUMENT and "k:" in e.value.message
+    with pytest.raises(hgraph_client.HgraphError) as e:
+        client.check(input_paths(), session="sessions/" + "0" * 32)
+    assert e.value.code == grpc.StatusCode.NOT_FOUND and "session" in e.value.message
+    # The server's limits, as for MergePaths (the module's server has --max-paths 8).
+    with pytest.raises(hgraph_client.HgraphError) as e:
+        client.check([input_paths().paths[0]] * 9)
+    assert e.value.code == grpc.StatusCode.RESOURCE_EXHAUSTED
+    assert "paths.paths" in e.value.message and "--max-paths" in e.value.message
+
+
 def test_sessions_list_get_delete(server):
     with server.client() as c:
         scene = c.upload_scene(DATA / "scene.json")
@@ -372,9 +438,15 @@ def test_eviction_under_a_small_budget_gives_not_found(server):
         assert s.stop() == 0, "".join(s.log)
 
 
-def test_sigterm_cancels_in_flight_merge_after_grace_and_exits_0():
-    s = Server("--grace-s", "0.5")
+HEALTH_SERVING, HEALTH_NOT_SERVING = b"\x08\x01", b"\x08\x02"
+
+
+def test_sigterm_drains_then_cancels_in_flight_merge_after_grace_and_exits_0():
+    drain_s, grace_s = 1.0, 0.5
+    s = Server("--grace-s", str(grace_s), "--drain-s", str(drain_s))
     with s.client() as c:
+        health = c.channel.unary_unary("/grpc.health.v1.Health/Check")
+        assert health(b"", timeout=5) == HEALTH_SERVING
         c.create_session(c.upload_scene(DATA / "scene.json"))
         request = service_pb2.MergePathsRequest(
             session=c.session, paths=hgraph_client.make_paths(densified(40)),
@@ -383,13 +455,22 @@ def test_sigterm_cancels_in_flight_merge_after_grace_and_exits_0():
         next(call)
         started = time.monotonic()
         s.proc.send_signal(signal.SIGTERM)
+        # The drain: health answers NOT_SERVING at once, and calls are still served.
+        while health(b"", timeout=5) != HEALTH_NOT_SERVING:
+            assert time.monotonic() - started < drain_s / 2, "health still SERVING"
+            time.sleep(0.02)
+        assert c.get_session().name == c.session
+        assert [x.name for x in c.list_sessions()] == [c.session]
+        assert time.monotonic() - started < drain_s, "the calls above outlasted the drain"
         with pytest.raises(grpc.RpcError) as e:
             for _ in call:
                 pass
         assert e.value.code() in (grpc.StatusCode.CANCELLED, grpc.StatusCode.UNAVAILABLE)
+        # Cancelled no earlier than drain + grace.
+        assert time.monotonic() - started >= drain_s + grace_s - 0.2
         assert s.proc.wait(timeout=15) == 0
-        assert time.monotonic() - started < 10
-    assert any("shut down cleanly" in line for line in s.log) or s.proc.returncode == 0
+        assert time.monotonic() - started < 10 + drain_s
+    assert any("shut down cleanly" in line for line in s.log)
 
 
 def run_cli(*args, timeout=120):

@@ -94,8 +94,9 @@ TEST(HGraphTest, RejectsBadInputNamingTheField) {
   const Space space = Plane();
   EXPECT_EQ(ErrorOf([&] { HGraph(space, {}, 1e-6); }),
             "paths: at least one input path is required");
-  EXPECT_EQ(ErrorOf([&] { HGraph(space, {InputPath{.name = "solo", .waypoints = {P(0, 0)}}}, 1e-6); }),
-            "paths[0].waypoints: path 'solo' has 1 waypoint(s); at least 2 are required");
+  EXPECT_EQ(
+      ErrorOf([&] { HGraph(space, {InputPath{.name = "solo", .waypoints = {P(0, 0)}}}, 1e-6); }),
+      "paths[0].waypoints: path 'solo' has 1 waypoint(s); at least 2 are required");
   EXPECT_EQ(ErrorOf([&] {
               HGraph(space, {InputPath{.waypoints = {P(0, 0), Eigen::Vector3d(1, 1, 1)}}}, 1e-6);
             }),
@@ -177,8 +178,8 @@ TEST(BridgeCandidatesTest, EditDistanceBridgesAGapToItsBoundaries) {
   // b leaves a at node 2 on a detour and rejoins at node 3.
   HGraph graph(space,
                {InputPath{.waypoints = {P(0, 0), P(1, 1), P(2, 2), P(3, 3), P(10, 10)}},
-                InputPath{.waypoints = {P(0, 0), P(1, 1.1), P(2, 2.1), P(2, 9), P(4, 9),
-                                        P(3, 3.1), P(10, 10)}}},
+                InputPath{.waypoints = {P(0, 0), P(1, 1.1), P(2, 2.1), P(2, 9), P(4, 9), P(3, 3.1),
+                                        P(10, 10)}}},
                1e-9);
   const CandidateSet set = BridgeCandidates(
       graph, space,

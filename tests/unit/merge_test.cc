@@ -20,8 +20,10 @@ using testing::CirclesScene;
 
 class MergeTest : public ::testing::Test {
  protected:
-  static void SetUpTestSuite() { world_ = new std::shared_ptr<const CollisionWorld>(
-      std::make_shared<CollisionWorld>(CirclesScene())); }
+  static void SetUpTestSuite() {
+    world_ =
+        new std::shared_ptr<const CollisionWorld>(std::make_shared<CollisionWorld>(CirclesScene()));
+  }
   static void TearDownTestSuite() {
     delete world_;
     world_ = nullptr;
@@ -47,10 +49,8 @@ class MergeTest : public ::testing::Test {
       for (size_t j = 1; j + 1 < path.waypoints.size(); ++j) {
         for (int attempt = 0; attempt < 20; ++attempt) {
           Config moved = path.waypoints[j] + Eigen::Vector2d(jitter(rng), jitter(rng));
-          const EdgeReport a =
-              planner.CheckEdge({.from = &path.waypoints[j - 1], .to = &moved});
-          const EdgeReport b =
-              planner.CheckEdge({.from = &moved, .to = &path.waypoints[j + 1]});
+          const EdgeReport a = planner.CheckEdge({.from = &path.waypoints[j - 1], .to = &moved});
+          const EdgeReport b = planner.CheckEdge({.from = &moved, .to = &path.waypoints[j + 1]});
           if (a.state == EdgeState::kValid && b.state == EdgeState::kValid) {
             path.waypoints[j] = moved;
             break;
@@ -178,8 +178,7 @@ TEST_F(MergeTest, InvalidInputEdgeIsReportedAndNotUsed) {
   std::vector<InputPath> inputs = CirclePaths();
   // Straight through the discs from start to goal.
   inputs.push_back(InputPath{
-      .name = "straight",
-      .waypoints = {inputs[0].waypoints.front(), inputs[0].waypoints.back()}});
+      .name = "straight", .waypoints = {inputs[0].waypoints.front(), inputs[0].waypoints.back()}});
   const MergeResult r = Merge(planner, MergeRequest{.paths = inputs});
   ASSERT_EQ(r.inputs.size(), 3u);
   EXPECT_FALSE(r.inputs[2].valid);
@@ -193,12 +192,10 @@ TEST_F(MergeTest, SubdividedInputsMergeNoWorseAndNameTheInputsOwnEdges) {
   const LocalPlanner planner = MakePlanner();
   std::vector<InputPath> inputs = PerturbedPaths(planner, 7, 3);
   const InputPath straight{.name = "straight",
-                           .waypoints = {inputs[0].waypoints.front(),
-                                         inputs[0].waypoints.back()}};
+                           .waypoints = {inputs[0].waypoints.front(), inputs[0].waypoints.back()}};
   inputs.push_back(straight);  // through the discs: its only edge is invalid
-  for (const MeasureSpec& measure :
-       {MeasureSpec{.type = MeasureType::kLength},
-        MeasureSpec{.type = MeasureType::kInverseClearance, .k = 3}}) {
+  for (const MeasureSpec& measure : {MeasureSpec{.type = MeasureType::kLength},
+                                     MeasureSpec{.type = MeasureType::kInverseClearance, .k = 3}}) {
     SCOPED_TRACE(MeasureTypeName(measure.type));
     const MergeOptions plain_options{.candidates = {.variant = Variant::kAllPairs}};
     MergeOptions dense_options = plain_options;
@@ -242,7 +239,8 @@ TEST_F(MergeTest, SubdividedInputsMergeNoWorseAndNameTheInputsOwnEdges) {
 
 TEST_F(MergeTest, CancelStopsTheMerge) {
   const LocalPlanner planner = MakePlanner();
-  MergeRequest request{.paths = CirclePaths(), .options = {.candidates = {.variant = Variant::kAllPairs}}};
+  MergeRequest request{.paths = CirclePaths(),
+                       .options = {.candidates = {.variant = Variant::kAllPairs}}};
   request.cancel.Cancel();
   try {
     Merge(planner, request);
@@ -289,9 +287,9 @@ namespace {
 TEST_F(MergeTest, StatsAreConsistent) {
   const LocalPlanner planner = MakePlanner();
   for (Variant variant : {Variant::kAllPairs, Variant::kEditDistance}) {
-    const MergeResult r =
-        Merge(planner, MergeRequest{.paths = CirclePaths(),
-                                    .options = {.candidates = {.variant = variant}}});
+    const MergeResult r = Merge(
+        planner,
+        MergeRequest{.paths = CirclePaths(), .options = {.candidates = {.variant = variant}}});
     EXPECT_GE(r.stats.edges_checked, r.stats.input_edges + r.stats.candidate_edges);
     EXPECT_LE(r.stats.edges_valid, r.stats.input_edges + r.stats.candidate_edges);
     // The repeated waypoint of the first OMPL path appears once in the output.

@@ -4,6 +4,8 @@
 
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <google/protobuf/io/coded_stream.h>
+#include <google/protobuf/io/zero_copy_stream_impl_lite.h>
 #include <gtest/gtest.h>
 
 #include <assimp/Importer.hpp>
@@ -97,6 +99,28 @@ TEST(OmplCfgTest, PlanarProblemFollowsOmplAppConventions) {
   ExpectNear(robot.lo, robot_file.lo - centroid, "robot lo");
   ExpectNear(robot.hi, robot_file.hi - centroid, "robot hi");
   ExpectNear(robot.hi - robot.lo, Eigen::Vector3d(0.6, 0.3, 0.2), "robot size");
+}
+
+// Scenes are content-addressed by their serialization: the imported problem and its JSON file
+// must be the same message, bit for bit (JSON reads -0 back as 0, for one).
+TEST(OmplCfgTest, ImportedSceneSurvivesItsJsonRoundTrip) {
+  const v1::Scene proto = ReadOmplAppProblem(kCfg);
+  v1::Scene again;
+  ParseJson(ToJson(proto), "round trip", &again);
+  std::string a, b;
+  {
+    google::protobuf::io::StringOutputStream out(&a);
+    google::protobuf::io::CodedOutputStream coded(&out);
+    coded.SetSerializationDeterministic(true);
+    proto.SerializeToCodedStream(&coded);
+  }
+  {
+    google::protobuf::io::StringOutputStream out(&b);
+    google::protobuf::io::CodedOutputStream coded(&out);
+    coded.SetSerializationDeterministic(true);
+    again.SerializeToCodedStream(&coded);
+  }
+  EXPECT_EQ(a, b);
 }
 
 TEST(OmplCfgTest, ReadSceneFileAcceptsCfg) {

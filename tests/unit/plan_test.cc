@@ -29,7 +29,8 @@ Fixture LoadBuiltIn(const std::string& name) {
   f.resolution = SceneResolution(ReadSceneFile(file));
   f.scene = LoadSceneFile(file);
   f.world = std::make_shared<const CollisionWorld>(f.scene);
-  f.planner = std::make_unique<LocalPlanner>(f.world, LocalPlannerOptions{.resolution = f.resolution});
+  f.planner =
+      std::make_unique<LocalPlanner>(f.world, LocalPlannerOptions{.resolution = f.resolution});
   return f;
 }
 
@@ -163,9 +164,11 @@ TEST(PlanNoPathTest, NoPathInTimeIsReportedNotThrown) {
   const LocalPlanner planner(world);
   for (PlannerType type : {PlannerType::kPRM, PlannerType::kRRTConnect, PlannerType::kRRT}) {
     SCOPED_TRACE(PlannerTypeName(type));
-    const PlanResult result = PlanPaths(
-        planner, {.planner = type, .start = Eigen::Vector2d(2, 5), .goal = Eigen::Vector2d(8, 5),
-                  .count = 2, .time_s = 0.2});
+    const PlanResult result = PlanPaths(planner, {.planner = type,
+                                                  .start = Eigen::Vector2d(2, 5),
+                                                  .goal = Eigen::Vector2d(8, 5),
+                                                  .count = 2,
+                                                  .time_s = 0.2});
     EXPECT_TRUE(result.paths.empty());
     ASSERT_EQ(result.attempts.size(), 2u);
     for (const PlanAttempt& a : result.attempts) {
@@ -221,8 +224,8 @@ TEST_F(PlanTest, ShortcutAndOmplHybridizationKeepPathsValidAndNoLonger) {
   double shortest = 1e300;
   for (const InputPath& path : planned.paths) shortest = std::min(shortest, Length(space, path));
 
-  const InputPath shortcut = ShortcutPath(*maze_->planner, planned.paths[0],
-                                          {.seed = 1, .resolution = maze_->resolution});
+  const InputPath shortcut =
+      ShortcutPath(*maze_->planner, planned.paths[0], {.seed = 1, .resolution = maze_->resolution});
   ExpectValid(*maze_->planner, shortcut);
   EXPECT_EQ(shortcut.waypoints.front(), planned.paths[0].waypoints.front());
   EXPECT_EQ(shortcut.waypoints.back(), planned.paths[0].waypoints.back());
@@ -255,10 +258,13 @@ TEST(BuiltInScenesTest, PRMSolvesEveryScene) {
     SCOPED_TRACE(name);
     const Fixture f = LoadBuiltIn(name);
     ASSERT_TRUE(f.scene->start && f.scene->goal);
-    const PlanResult result = PlanPaths(
-        *f.planner, {.planner = PlannerType::kPRM, .start = *f.scene->start,
-                     .goal = *f.scene->goal, .count = 1, .time_s = 120, .seed = 1,
-                     .resolution = f.resolution});
+    const PlanResult result = PlanPaths(*f.planner, {.planner = PlannerType::kPRM,
+                                                     .start = *f.scene->start,
+                                                     .goal = *f.scene->goal,
+                                                     .count = 1,
+                                                     .time_s = 120,
+                                                     .seed = 1,
+                                                     .resolution = f.resolution});
     ASSERT_EQ(result.paths.size(), 1u) << result.attempts[0].status;
     ExpectValid(*f.planner, result.paths[0]);
     std::printf("%s: PRM found a path in %.1f ms\n", name.c_str(), result.attempts[0].elapsed_ms);

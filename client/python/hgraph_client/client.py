@@ -57,6 +57,22 @@ class MergeOutcome:
     progress_events: int
 
 
+@dataclasses.dataclass
+class CheckOutcome:
+    # One report per path, in request order: valid, invalid_edge, invalid_at, invalid_cause,
+    # invalid_reason, certified, waypoints and quality (length, min/avg/inverse clearance).
+    paths: list
+    collision_checks: int
+    distance_queries: int
+    resolution: float
+    elapsed_ms: float
+
+    @property
+    def valid(self) -> bool:
+        """True when every path is valid."""
+        return all(p.valid for p in self.paths)
+
+
 PathLike = Union[path_pb2.Path, Sequence[Sequence[float]]]
 
 
@@ -267,6 +283,27 @@ class Client:
                 hgraph=hgraph, measure=make_measure(measure, k, safety)), timeout=timeout).result
         except grpc.RpcError as e:
             _raise(e)
+
+    def check(self, paths, *, session: Optional[str] = None,
+              resolution: Optional[float] = None, k: Optional[float] = None,
+              sampled: bool = False, timeout: Optional[float] = None) -> CheckOutcome:
+        """Checks each path in the session's scene as a merge checks its inputs (CheckPaths).
+
+        The paths need not share endpoints; a path of one waypoint is checked where it stands.
+        `sampled` asks for the collision test at the samples only (no clearance, no certificate).
+        """
+        request = service_pb2.CheckPathsRequest(
+            session=session or self.session or "", paths=make_paths(paths), sampled=sampled)
+        if resolution is not None:
+            request.resolution = resolution
+        if k is not None:
+            request.k = k
+        try:
+            response = self.stub.CheckPaths(request, timeout=timeout)
+        except grpc.RpcError as e:
+            _raise(e)
+        return CheckOutcome(list(response.paths), response.collision_checks,
+                            response.distance_queries, response.resolution, response.elapsed_ms)
 
     def plan(self, *, count: int = 1, planner: str = "", time_per_path_s: float = 0,
              seed: int = 1, simplify: bool = False, session: Optional[str] = None,

@@ -7,7 +7,7 @@
 #include <string>
 #include <string_view>
 
-namespace hgraph::server {
+namespace hgraph {
 
 // Incremental SHA-256 (OpenSSL EVP). Not copyable; movable.
 class Sha256 {
@@ -37,4 +37,4 @@ bool IsSha256Hex(std::string_view text);
 // unguessable, so a seeded generator would be wrong here).
 std::string RandomHex128();
 
-}  // namespace hgraph::server
+}  // namespace hgraph

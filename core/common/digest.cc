@@ -1,4 +1,4 @@
-#include "server/digest.h"
+#include "core/common/digest.h"
 
 #include <openssl/evp.h>
 #include <openssl/rand.h>
@@ -8,7 +8,7 @@
 
 #include "core/common/error.h"
 
-namespace hgraph::server {
+namespace hgraph {
 namespace {
 
 std::string Hex(const unsigned char* bytes, size_t n) {
@@ -68,4 +68,4 @@ std::string RandomHex128() {
   return Hex(bytes.data(), bytes.size());
 }
 
-}  // namespace hgraph::server
+}  // namespace hgraph
