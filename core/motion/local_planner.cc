@@ -2,6 +2,7 @@
 
 #include <tbb/enumerable_thread_specific.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -73,7 +74,8 @@ class EdgeCheck {
     double bound = 0;
     for (size_t i = 0; i < body_component_.size(); ++i) {
       const int c = body_component_[i];
-      bound += space_.TranslationDistance(c, a, b) + body_radius_[i] * space_.RotationAngle(c, a, b);
+      bound +=
+          space_.TranslationDistance(c, a, b) + body_radius_[i] * space_.RotationAngle(c, a, b);
     }
     return bound;
   }
@@ -182,7 +184,30 @@ EdgeReport LocalPlanner::CheckEdge(const EdgeCheckRequest& request) const {
     }
   }
   report.state = EdgeState::kValid;
-  if (!request.need_clearance) return finish();
+  if (!request.need_clearance && !request.certify) return finish();
+  if (!request.need_clearance) {
+    // Conservative advancement (see EdgeCheckRequest::certify). The motion bound is linear in t
+    // along a straight motion, so a clearance c at t frees [t, t + c / bound).
+    const double bound = check.MotionBound(from, to);
+    const double finest = 1.0 / (static_cast<double>(segments) * (1 << kMaxRefineDepth));
+    constexpr double kMargin = 0.999;
+    double t = 0;
+    bool advanced = true;
+    while (t < 1) {
+      const double clearance = context.Clearance(t == 0 ? from : check.At(t));
+      if (clearance <= 0) return invalid(t);
+      const double step = bound > 0 ? kMargin * clearance / bound : 1.0;
+      if (step < finest) {
+        advanced = false;
+        break;
+      }
+      t = std::min(1.0, t + step);
+    }
+    if (advanced) {
+      report.certified = true;
+      return finish();
+    }
+  }
 
   std::vector<Config> grid;
   std::vector<ClearanceSample> samples;

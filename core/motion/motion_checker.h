@@ -44,6 +44,13 @@ struct EdgeCheckRequest {
   // re-checked for its clearance profile): skip straight to the clearance samples, which find
   // any collision on their own.
   bool known_valid = false;
+  // Without need_clearance: also prove the motion free between its samples, for a caller that
+  // wants validity with the merge's guarantee but no profile (a planner's motion validator).
+  // Conservative advancement: from a point with clearance c the robot moves freely while no
+  // point of it moves c, so one distance query clears a long stretch in open space. Where the
+  // steps would shrink below the profile's finest refinement, the full clearance check runs
+  // instead, so the answer is the one need_clearance would give. Sets report.certified.
+  bool certify = false;
 };
 
 // Checks straight motions. Implementations must be thread safe: the H-Graph calls CheckEdge

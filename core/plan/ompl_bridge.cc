@@ -81,13 +81,14 @@ class CheckerMotion final : public ob::MotionValidator {
   }
 
  private:
-  // The check a merge applies to its input edges: with clearance asked for, the local planner
-  // also certifies the stretches between its samples and rejects touching contact. The plain
-  // sampled check lets thin parts graze corners between samples, and a path that grazes would
-  // be reported invalid by the merge it was planned for.
+  // The validity a merge applies to its input edges (the stretches between samples proven free,
+  // touching contact rejected), without the clearance profile a planner does not need: the
+  // certificate comes from conservative advancement, a few distance queries per motion in open
+  // space instead of one per sample. The plain sampled check lets thin parts graze corners
+  // between samples, and a path that grazes would be reported invalid by the merge it was
+  // planned for.
   bool Certified(const Config& a, const Config& b) const {
-    return checker_.CheckEdge({.from = &a, .to = &b, .need_clearance = true}).state ==
-           EdgeState::kValid;
+    return checker_.CheckEdge({.from = &a, .to = &b, .certify = true}).state == EdgeState::kValid;
   }
 
   bool Count(bool valid) const {
@@ -164,9 +165,7 @@ void ToOmpl(const Space& space, const Config& q, ob::State* state) {
         for (int k = 0; k < space.size(i); ++k) rn->values[k] = q[o + k];
         break;
       }
-      case ComponentType::kSO2:
-        s->as<ob::SO2StateSpace::StateType>()->value = q[o];
-        break;
+      case ComponentType::kSO2: s->as<ob::SO2StateSpace::StateType>()->value = q[o]; break;
       case ComponentType::kSO3: {
         auto* r = s->as<ob::SO3StateSpace::StateType>();
         r->x = q[o];
@@ -207,9 +206,7 @@ Config FromOmpl(const Space& space, const ob::State* state) {
         for (int k = 0; k < space.size(i); ++k) q[o + k] = rn->values[k];
         break;
       }
-      case ComponentType::kSO2:
-        q[o] = s->as<ob::SO2StateSpace::StateType>()->value;
-        break;
+      case ComponentType::kSO2: q[o] = s->as<ob::SO2StateSpace::StateType>()->value; break;
       case ComponentType::kSO3: {
         const auto* r = s->as<ob::SO3StateSpace::StateType>();
         q.segment<4>(o) << r->x, r->y, r->z, r->w;
@@ -233,7 +230,8 @@ Config FromOmpl(const Space& space, const ob::State* state) {
 
 ob::SpaceInformationPtr MakeSpaceInformation(const MotionChecker& checker, double resolution) {
   if (!(resolution > 0) || !std::isfinite(resolution)) {
-    throw InputError("resolution", "must be positive and finite, got " + std::to_string(resolution));
+    throw InputError("resolution",
+                     "must be positive and finite, got " + std::to_string(resolution));
   }
   auto si = std::make_shared<ob::SpaceInformation>(MakeStateSpace(checker.space(), resolution));
   si->setStateValidityChecker(std::make_shared<CheckerValidity>(si, checker));
