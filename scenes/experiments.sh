@@ -11,6 +11,7 @@ set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 hgraph=${1:-$here/../build/hgraph}
 out=${OUT:-$(mktemp -d)}
+mkdir -p "$out"
 seeds=${SEEDS:-10}
 # PRM's budget per input path, seconds (the paper: 1 s on grid). PRM stops at its first
 # solution, so a larger budget only saves seeds that a loaded machine would lose.
