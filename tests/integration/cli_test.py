@@ -485,6 +485,40 @@ def import_cfg_server_then_merge_in_session(env):
                "import-cfg --server without --out failed")
 
 
+def plan_merge_check(env, name):
+    """`hgraph plan` (the paper's PRM) then `hgraph merge` on a built-in scene: the merged path
+    passes `hgraph check`, keeps the endpoints and is no longer than the shorter input."""
+    scene = env.data.parent.parent / "scenes" / name / "scene.json"
+    # PRM stops at its first solution; the budget only matters on a starved machine.
+    plan = env.run("plan", "--scene", scene, "--planner", "prm", "--count", "2", "--time", "120",
+                   "--seed", "3", "--out", "inputs.json")
+    expect(plan.returncode == 0, "plan failed on %s" % name)
+    inputs = json.loads((env.work / "inputs.json").read_text())["paths"]
+    expect(len(inputs) == 2, "expected 2 planned paths, got %d" % len(inputs))
+    check_inputs = env.run("check", "--scene", scene, "--paths", "inputs.json")
+    expect(check_inputs.returncode == 0, "planned inputs fail hgraph check on %s" % name)
+    merge = env.run("merge", "-q", "--scene", scene, "--paths", "inputs.json", "--out",
+                    "result.json", "--out-path", "merged.json")
+    expect(merge.returncode == 0, "merge failed on %s" % name)
+    result = json.loads((env.work / "result.json").read_text())
+    check = env.run("check", "--scene", scene, "--paths", "merged.json")
+    expect(check.returncode == 0, "the merged path fails hgraph check on %s" % name)
+    merged = result["path"]["waypoints"]
+    for end in (0, -1):
+        expect(all(abs(a - b) < 1e-9 for a, b in
+                   zip(merged[end]["values"], inputs[0]["waypoints"][end]["values"])),
+               "the merged path does not keep the endpoints on %s" % name)
+    shortest = min(i["quality"]["length"] for i in result["inputs"] if i["valid"])
+    expect(result["quality"]["length"] <= shortest + 1e-9,
+           "merged %g longer than the shorter input %g on %s"
+           % (result["quality"]["length"], shortest, name))
+
+
+for _scene in ("maze", "grid", "wrench", "double_wrench", "circles"):
+    CASES["plan_merge_check_" + _scene] = (lambda name: lambda env: plan_merge_check(env, name))(
+        _scene)
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--list", action="store_true")
