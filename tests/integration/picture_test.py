@@ -127,6 +127,29 @@ def merge_svg_renders(env):
 
 
 @case
+def grid_merge_svg_shows_scene_inputs_and_merged_path(env):
+    # The paper's Figure 1 setting: PRM inputs through the grid, merged; the rotating rectangle
+    # is drawn along the merged path.
+    scene = env.data.parent.parent / "scenes" / "grid" / "scene.json"
+    paths = env.work / "grid_inputs.json"
+    env.run("plan", "--scene", scene, "--planner", "prm", "--count", 3, "--time", 120, "--seed", 2,
+            "--out", paths)
+    svg = env.work / "grid.svg"
+    env.run("merge", "--scene", scene, "--paths", paths, "--svg", svg, "-q")
+    text = svg.read_text()
+    expect(text.count("<polyline") >= 4, "expected 3 input polylines and the merged one")
+    rows = env.png_of(svg)
+    red = count_colour(rows, MERGED_RGB)
+    expect(red > 800, "only %d pixels of the merged path's colour" % red)
+    grey = count_colour(rows, (0xA0, 0xA0, 0xA0), tolerance=6)
+    expect(grey > 1000, "only %d pixels of the inputs' grey" % grey)
+    obstacle = count_colour(rows, (0x5F, 0x5F, 0x5F), tolerance=4)
+    expect(obstacle > 50000, "only %d obstacle pixels (6 rows of 5 rectangles)" % obstacle)
+    blue = sum(1 for row in rows for p in row if p[2] > 150 and p[2] - p[0] > 40)
+    expect(blue > 300, "only %d pixels of the robot's footprints" % blue)
+
+
+@case
 def render_with_result_and_planes(env):
     scene = env.data / "circles" / "scene.json"
     paths = env.data / "circles" / "paths.txt"
