@@ -301,7 +301,15 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
     stored->scene = scene;
     stored->planner =
         std::make_unique<LocalPlanner>(scene.world, LocalPlannerOptions{.resolution = resolution});
-    stored->session = std::make_unique<HybridizationSession>(*stored->planner, merge);
+    try {
+      stored->session = std::make_unique<HybridizationSession>(*stored->planner, merge);
+    } catch (const Error& e) {
+      // The engine names the paths as its own list ("paths[1].waypoints[3]"); the client sent
+      // them as the request's "paths.paths", as every other message here names them.
+      if (e.field().rfind("paths[", 0) != 0) throw;
+      throw Error(e.code(), "paths." + e.field(),
+                  std::string(e.what()).substr(e.field().size() + 2));
+    }
     const MergeResult result = stored->session->Query(merge.measure, merge.progress, token_);
     *out->mutable_result() = MergeResultToProto(result);
     service_->RecordMerge("MergePaths", out->result());

@@ -12,6 +12,7 @@
 #include "core/collision/collision_world.h"
 #include "core/common/error.h"
 #include "core/common/progress.h"
+#include "core/merge/merge.h"
 #include "core/motion/local_planner.h"
 #include "core/scene/scene.h"
 #include "hgraph/v1/scene.pb.h"
@@ -72,6 +73,10 @@ class ProgressPrinter {
 // Rethrows an InputError about a proto field set from a flag so that it names both
 // ("measure.k (--k)"); other errors are rethrown unchanged. Call only from a catch block.
 [[noreturn]] void RethrowWithFlag(const Error& e, const std::map<std::string, std::string>& flags);
+
+// The human table of a merge: every input and the merged path under every measure, invalid
+// inputs' first bad edge, the objective against the best input, stats and per-phase timing.
+void PrintMergeTable(const MergeResult& result);
 
 // Fixed-width number for tables: "inf" for infinity, "-" for NaN.
 std::string Cell(double v, int width, int precision = 4);

@@ -85,49 +85,6 @@ void BuildProtos(const MergeFlags& f, v1::Measure* measure, v1::MergeOptions* op
   options->set_threads(f.threads);
 }
 
-void PrintQualityRow(const std::string& name, int waypoints, bool valid, const PathQuality& q) {
-  std::printf("%-20.20s %9d %5s %12s %10s %10s %14s\n", name.c_str(), waypoints,
-              valid ? "yes" : "NO", Cell(q.length, 12).c_str(), Cell(q.min_clearance, 10).c_str(),
-              Cell(q.avg_clearance, 10).c_str(), Cell(q.inverse_clearance, 14).c_str());
-}
-
-void PrintResult(const MergeResult& r) {
-  std::printf("%-20s %9s %5s %12s %10s %10s %14s\n", "path", "waypoints", "valid", "length",
-              "min clear", "avg clear", ("inv clear k=" + Cell(r.quality.k, 0, 3)).c_str());
-  for (const InputReport& input : r.inputs) {
-    PrintQualityRow(input.name, input.waypoints, input.valid, input.quality);
-  }
-  PrintQualityRow("merged", static_cast<int>(r.path.waypoints.size()), true, r.quality);
-  for (const InputReport& input : r.inputs) {
-    if (!input.valid) {
-      std::printf("  %s: edge %d invalid: %s\n", input.name.c_str(), input.invalid_edge,
-                  input.invalid_reason.c_str());
-    }
-  }
-  std::printf("measure %s (%s variant): objective %s", MeasureTypeName(r.measure.type),
-              VariantName(r.variant), Cell(r.objective, 0).c_str());
-  if (r.best_input >= 0 && r.best_input < static_cast<int>(r.inputs.size())) {
-    std::printf(", best input '%s' %s", r.inputs[r.best_input].name.c_str(),
-                Cell(r.best_input_objective, 0).c_str());
-  }
-  std::printf("\n");
-  const MergeStats& s = r.stats;
-  std::printf(
-      "stats: %lld nodes, %lld input edges (%lld invalid), %lld candidates, %lld edges checked, "
-      "%lld valid, %lld reused, %lld collision checks, %lld distance queries, %d threads\n",
-      static_cast<long long>(s.nodes), static_cast<long long>(s.input_edges),
-      static_cast<long long>(s.input_edges_invalid), static_cast<long long>(s.candidate_edges),
-      static_cast<long long>(s.edges_checked), static_cast<long long>(s.edges_valid),
-      static_cast<long long>(s.edges_reused), static_cast<long long>(s.collision_checks),
-      static_cast<long long>(s.distance_queries), s.threads);
-  const MergeTiming& t = r.timing;
-  std::printf(
-      "timing (ms): validate %.1f, inputs %.1f, align %.1f, candidates %.1f, check %.1f, "
-      "search %.1f, evaluate %.1f, total %.1f\n",
-      t.validate_ms, t.inputs_ms, t.align_ms, t.candidates_ms, t.check_ms, t.search_ms,
-      t.evaluate_ms, t.total_ms);
-}
-
 int RunMerge(const MergeFlags& f) {
   v1::Measure measure_proto;
   v1::MergeOptions options_proto;
@@ -162,7 +119,7 @@ int RunMerge(const MergeFlags& f) {
     WriteTextFile(f.svg, RenderSvg(*loaded.scene, MergePicture(request.paths, result,
                                                                f.shortcut ? &shortcut : nullptr)));
   }
-  PrintResult(result);
+  PrintMergeTable(result);
   if (f.shortcut) PrintShortcutRow(shortcut, result);
   return kExitOk;
 }

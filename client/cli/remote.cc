@@ -212,35 +212,11 @@ bool Given(CLI::App* app, const std::string& name) {
   return option != nullptr && option->count() > 0;
 }
 
-void PrintQuality(const std::string& name, int waypoints, bool valid, const v1::PathQuality& q) {
-  std::printf("%-20.20s %9d %5s %12s %10s %10s %14s\n", name.c_str(), waypoints,
-              valid ? "yes" : "NO", Cell(q.length(), 12).c_str(),
-              Cell(q.min_clearance(), 10).c_str(), Cell(q.avg_clearance(), 10).c_str(),
-              Cell(q.inverse_clearance(), 14).c_str());
-}
-
 }  // namespace
 
 // The same table as the in-process merge, from the proto result.
 void PrintRemoteResult(const v1::MergeResult& r, const std::string& hgraph) {
-  std::printf("%-20s %9s %5s %12s %10s %10s %14s\n", "path", "waypoints", "valid", "length",
-              "min clear", "avg clear", ("inv clear k=" + Cell(r.quality().k(), 0, 3)).c_str());
-  for (const v1::InputReport& input : r.inputs()) {
-    PrintQuality(input.name(), input.waypoints(), input.valid(), input.quality());
-  }
-  PrintQuality("merged", r.path().waypoints_size(), true, r.quality());
-  const MeasureSpec measure = MeasureFromProto(r.measure());
-  std::printf("measure %s (%s variant): objective %s\n", MeasureTypeName(measure.type),
-              VariantName(VariantFromProto(r.variant())), Cell(r.objective(), 0).c_str());
-  const v1::MergeStats& s = r.stats();
-  std::printf(
-      "stats: %lld nodes, %lld candidates, %lld edges checked, %lld reused, %lld collision "
-      "checks, %lld distance queries, %d threads\n",
-      static_cast<long long>(s.nodes()), static_cast<long long>(s.candidate_edges()),
-      static_cast<long long>(s.edges_checked()), static_cast<long long>(s.edges_reused()),
-      static_cast<long long>(s.collision_checks()), static_cast<long long>(s.distance_queries()),
-      s.threads());
-  std::printf("timing (ms): total %.1f\n", r.timing().total_ms());
+  PrintMergeTable(MergeResultFromProto(r));
   if (!hgraph.empty()) std::printf("hgraph %s\n", hgraph.c_str());
 }
 

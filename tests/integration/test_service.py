@@ -272,6 +272,17 @@ def test_over_limit_batch_and_bad_values(client):
         client.merge(input_paths(), measure="safe-length", safety=1000)
     assert e.value.code == grpc.StatusCode.FAILED_PRECONDITION
     assert "measure.safety" in e.value.message
+    # A bad waypoint is named as the request holds it, as CheckPaths names it.
+    paths = [[list(q.values) for q in p.waypoints] for p in input_paths().paths]
+    paths[1][2] = [float("inf"), 1.0]
+    with pytest.raises(hgraph_client.HgraphError) as e:
+        client.merge(paths)
+    assert e.value.code == grpc.StatusCode.INVALID_ARGUMENT
+    assert e.value.message.startswith("paths.paths[1].waypoints[2][0]: "), e.value.message
+    with pytest.raises(hgraph_client.HgraphError) as e:
+        client.merge(input_paths(), max_node_spacing=-1)
+    assert e.value.code == grpc.StatusCode.INVALID_ARGUMENT
+    assert "options.max_node_spacing" in e.value.message
 
 
 def test_check_paths_reports_what_merge_reports(client):

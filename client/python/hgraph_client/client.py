@@ -240,16 +240,22 @@ class Client:
     def merge(self, paths, *, measure: Union[str, merge_pb2.Measure] = "length",
               k: Optional[float] = None, safety: Optional[float] = None,
               variant: Optional[str] = None, options: Optional[merge_pb2.MergeOptions] = None,
+              max_node_spacing: Optional[float] = None,
               session: Optional[str] = None,
               on_progress: Optional[Callable[[Progress], None]] = None,
               progress_interval_ms: int = 0, seed: int = 0,
               timeout: Optional[float] = None) -> MergeOutcome:
-        """Merges the paths in the session (default: the current one), streaming progress."""
+        """Merges the paths in the session (default: the current one), streaming progress.
+
+        `max_node_spacing` subdivides long input edges in the H-Graph so that bridges can leave
+        an input mid-edge (MergeOptions.max_node_spacing)."""
         opts = merge_pb2.MergeOptions()
         if options is not None:
             opts.CopyFrom(options)
         if variant is not None:
             opts.variant = VARIANTS[variant]
+        if max_node_spacing is not None:
+            opts.max_node_spacing = max_node_spacing
         request = service_pb2.MergePathsRequest(
             session=session or self.session or "", paths=make_paths(paths),
             measure=make_measure(measure, k, safety), options=opts, seed=seed,
