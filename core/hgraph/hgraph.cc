@@ -1,6 +1,7 @@
 #include "core/hgraph/hgraph.h"
 
 #include <cmath>
+#include <cstdio>
 
 #include "core/common/error.h"
 
@@ -75,10 +76,11 @@ HGraph::HGraph(const Space& space, std::vector<InputPath> paths, double endpoint
       // A bound on the parts keeps a tiny spacing from exhausting memory; the message says how
       // to stay under it.
       if (parts > kMaxPartsPerEdge) {
-        throw InputError("options.max_node_spacing",
-                         std::to_string(max_node_spacing) + " would cut edge " + std::to_string(j) +
-                             " of path '" + paths_[p].name + "' (length " + std::to_string(length) +
-                             ") into more than " + std::to_string(kMaxPartsPerEdge) + " parts");
+        char text[200];
+        std::snprintf(text, sizeof(text),
+                      "%g would cut edge %zu of path '%.60s' (length %g) into more than %d parts",
+                      max_node_spacing, j, paths_[p].name.c_str(), length, kMaxPartsPerEdge);
+        throw InputError("options.max_node_spacing", text);
       }
       for (int k = 1; k < static_cast<int>(parts); ++k) {
         const double t = k / parts;
