@@ -3,6 +3,8 @@
 #include <benchmark/benchmark.h>
 
 #include <random>
+#include <utility>
+#include <vector>
 
 #include "core/collision/collision_world.h"
 #include "core/merge/merge.h"
@@ -73,6 +75,52 @@ BENCHMARK_CAPTURE(BM_CollisionCheck, circles, Circles());
 BENCHMARK_CAPTURE(BM_DistanceQuery, circles, Circles());
 BENCHMARK_CAPTURE(BM_CollisionCheck, lattice_mesh, Lattice());
 BENCHMARK_CAPTURE(BM_DistanceQuery, lattice_mesh, Lattice());
+
+// Free straight motions of the rod in the lattice (valid under the clearance check), each ~2
+// units long, for the edge-check modes below.
+const std::vector<std::pair<Config, Config>>& LatticeEdges() {
+  static const auto edges = [] {
+    const LocalPlanner planner(Lattice(), {.resolution = 0.004});
+    const Space& space = planner.space();
+    std::mt19937_64 rng(7);
+    std::vector<std::pair<Config, Config>> out;
+    while (out.size() < 64) {
+      const Config from = space.Sample(rng);
+      Config to = space.Sample(rng);
+      to.head<3>() = from.head<3>() + 2.0 * (to.head<3>() - from.head<3>()).normalized();
+      if (!space.InBounds(to)) continue;
+      if (planner.CheckEdge({.from = &from, .to = &to, .need_clearance = true}).state ==
+          EdgeState::kValid) {
+        out.emplace_back(from, to);
+      }
+    }
+    return out;
+  }();
+  return edges;
+}
+
+// One edge check of a free motion: 0 = sampled collision test, 1 = certify (conservative
+// advancement), 2 = clearance profile (the merge's check for clearance measures).
+void BM_EdgeCheck(benchmark::State& state) {
+  const LocalPlanner planner(Lattice(), {.resolution = 0.004});
+  const auto& edges = LatticeEdges();
+  const int mode = static_cast<int>(state.range(0));
+  size_t i = 0;
+  int64_t queries = 0, checks = 0, edges_run = 0;
+  for (auto _ : state) {
+    const auto& [from, to] = edges[i++ % edges.size()];
+    const EdgeReport report = planner.CheckEdge(
+        {.from = &from, .to = &to, .need_clearance = mode == 2, .certify = mode == 1});
+    benchmark::DoNotOptimize(report.state);
+    queries += report.distance_queries;
+    checks += report.collision_checks;
+    ++edges_run;
+  }
+  state.SetLabel(mode == 0 ? "sampled" : mode == 1 ? "certify" : "profile");
+  state.counters["distances_per_edge"] = static_cast<double>(queries) / edges_run;
+  state.counters["checks_per_edge"] = static_cast<double>(checks) / edges_run;
+}
+BENCHMARK(BM_EdgeCheck)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond);
 
 void BM_MergeCircles(benchmark::State& state) {
   const LocalPlanner planner(Circles());
