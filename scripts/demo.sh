@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# The demo: starts hgraph-server on a loopback port, plans three input paths with the paper's PRM
+# on the built-in grid scene through it, merges them for length (all-pairs on a subdivided
+# H-Graph) and writes a picture. Usage: scripts/demo.sh [BUILD_DIR] [OUT_DIR]
+# (defaults: build, a fresh temporary folder). Exits non-zero if any step fails.
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+build=$(cd "${1:-$root/build}" && pwd)
+out=${2:-$(mktemp -d)}
+mkdir -p "$out"
+scene="$root/scenes/grid/scene.json"
+
+"$build/hgraph-server" --listen 127.0.0.1:0 --metrics-listen "" --drain-s 0 \
+  > "$out/server.out" 2> "$out/server.log" &
+server=$!
+trap 'kill -TERM $server 2>/dev/null || true; wait $server 2>/dev/null || true' EXIT
+for _ in $(seq 100); do
+  grep -q "grpc_port=" "$out/server.out" 2>/dev/null && break
+  sleep 0.1
+done
+port=$(sed -n 's/.*grpc_port=\([0-9]*\).*/\1/p' "$out/server.out")
+[ -n "$port" ] || { echo "hgraph-server did not start:"; cat "$out/server.log"; exit 1; }
+echo "hgraph-server listening on 127.0.0.1:$port (log: $out/server.log)"
+
+"$build/hgraph" plan --server "127.0.0.1:$port" --scene "$scene" --planner prm --count 3 \
+  --time 5 --seed 1 --out "$out/inputs.json"
+"$build/hgraph" merge --server "127.0.0.1:$port" --scene "$scene" --paths "$out/inputs.json" \
+  --variant all-pairs --max-node-spacing 0.5 --measure length \
+  --out "$out/result.json" --out-path "$out/merged.json" --svg "$out/grid.svg"
+"$build/hgraph" check --server "127.0.0.1:$port" --scene "$scene" --paths "$out/merged.json"
+echo "picture: $out/grid.svg (rsvg-convert $out/grid.svg -o grid.png)"
