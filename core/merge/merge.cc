@@ -12,6 +12,7 @@
 #include <mutex>
 
 #include "core/common/error.h"
+#include "core/common/parallel.h"
 #include "core/merge/path_check.h"
 #include "core/search/search.h"
 
@@ -170,8 +171,7 @@ void HybridizationSession::CheckEdges(const std::vector<int>& edge_ids, bool nee
   if (total == 0) return;
   const ProgressReporter reporter(progress, phase, total, *checker_, Clock::now());
   std::atomic<int64_t> done{0};
-  tbb::task_arena arena(ResolveThreads(options_.threads));
-  arena.execute([&] {
+  RunWithThreads(ResolveThreads(options_.threads), [&] {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, edge_ids.size(), 1),
                       [&](const tbb::blocked_range<size_t>& range) {
                         for (size_t k = range.begin(); k != range.end(); ++k) {

@@ -12,6 +12,7 @@
 #include <cstdio>
 
 #include "core/common/error.h"
+#include "core/common/parallel.h"
 
 namespace hgraph {
 namespace {
@@ -133,8 +134,7 @@ PathCheckResult CheckPaths(const MotionChecker& checker, const PathCheckRequest&
   const int64_t total = static_cast<int64_t>(jobs.size());
   const int64_t step = std::max<int64_t>(1, total / 100);
   std::atomic<int64_t> done{0}, checks{0}, queries{0};
-  tbb::task_arena arena(request.threads == 0 ? tbb::info::default_concurrency() : request.threads);
-  arena.execute([&] {
+  RunWithThreads(request.threads == 0 ? tbb::info::default_concurrency() : request.threads, [&] {
     tbb::parallel_for(
         tbb::blocked_range<size_t>(0, jobs.size(), 1),
         [&](const tbb::blocked_range<size_t>& range) {
