@@ -13,6 +13,12 @@
 
 namespace hgraph {
 
+// Milliseconds of wall time since `start` (the per-phase timings of merges and checks).
+inline double MsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+      .count();
+}
+
 // A flag that any thread may set and that long operations poll. Thread safe. Shared by
 // copying the token: all copies observe the same flag. An optional deadline makes
 // ThrowIfStopped report kDeadlineExceeded once it has passed.

@@ -21,10 +21,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double MsSince(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
-
 int ResolveThreads(int threads) {
   if (threads < 0) throw InputError("options.threads", "must be >= 0 (0 = all cores)");
   return threads == 0 ? tbb::info::default_concurrency() : threads;

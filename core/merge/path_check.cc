@@ -19,10 +19,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double MsSince(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
-
 std::string ShortNumber(double v) {
   char text[32];
   std::snprintf(text, sizeof(text), "%.3g", v);

@@ -111,19 +111,24 @@ class Env:
         return rows
 
 
+def expect_layers(rows, merged, inputs, obstacles):
+    """More than the given numbers of pixels in the merged path's red, the inputs' grey and the
+    obstacles' grey (core/render's colours)."""
+    red = count_colour(rows, MERGED_RGB)
+    expect(red > merged, "only %d pixels of the merged path's colour" % red)
+    grey = count_colour(rows, (0xA0, 0xA0, 0xA0), tolerance=6)
+    expect(grey > inputs, "only %d pixels of the inputs' grey" % grey)
+    obstacle = count_colour(rows, (0x5F, 0x5F, 0x5F), tolerance=4)
+    expect(obstacle > obstacles, "only %d obstacle pixels" % obstacle)
+
+
 @case
 def merge_svg_renders(env):
     scene = env.data / "circles" / "scene.json"
     svg = env.work / "circles.svg"
     env.run("merge", "--scene", scene, "--paths", env.data / "circles" / "paths.txt",
             "--out", env.work / "circles_result.json", "--svg", svg, "-q")
-    rows = env.png_of(svg)
-    red = count_colour(rows, MERGED_RGB)
-    expect(red > 500, "only %d pixels of the merged path's colour" % red)
-    grey = count_colour(rows, (0xA0, 0xA0, 0xA0), tolerance=6)
-    expect(grey > 100, "only %d pixels of the inputs' grey" % grey)
-    obstacle = count_colour(rows, (0x5F, 0x5F, 0x5F), tolerance=4)
-    expect(obstacle > 10000, "only %d obstacle pixels" % obstacle)
+    expect_layers(env.png_of(svg), merged=500, inputs=100, obstacles=10000)
 
 
 @case
@@ -139,12 +144,7 @@ def grid_merge_svg_shows_scene_inputs_and_merged_path(env):
     text = svg.read_text()
     expect(text.count("<polyline") >= 4, "expected 3 input polylines and the merged one")
     rows = env.png_of(svg)
-    red = count_colour(rows, MERGED_RGB)
-    expect(red > 800, "only %d pixels of the merged path's colour" % red)
-    grey = count_colour(rows, (0xA0, 0xA0, 0xA0), tolerance=6)
-    expect(grey > 1000, "only %d pixels of the inputs' grey" % grey)
-    obstacle = count_colour(rows, (0x5F, 0x5F, 0x5F), tolerance=4)
-    expect(obstacle > 50000, "only %d obstacle pixels (6 rows of 5 rectangles)" % obstacle)
+    expect_layers(rows, merged=800, inputs=1000, obstacles=50000)
     blue = sum(1 for row in rows for p in row if p[2] > 150 and p[2] - p[0] > 40)
     expect(blue > 300, "only %d pixels of the robot's footprints" % blue)
 
