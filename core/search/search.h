@@ -5,6 +5,7 @@
 // evaluation, on unchecked ones (the measure's bounds).
 #pragma once
 
+#include <cstdint>
 #include <functional>
 #include <vector>
 
@@ -36,6 +37,25 @@ using SearchEdgeFn = std::function<SearchEdge(int edge)>;
 // heuristic; kSum only). found == false if the usable edges do not connect start and goal.
 SearchResult FindBestPath(const HGraph& graph, const Measure& measure, const SearchEdgeFn& edge,
                           const std::vector<double>* cost_to_go = nullptr);
+
+// Lazy search (lazy weighted A*, and its widest-path analogue for bottleneck measures): an edge
+// enters the open list with its bound and is checked only when the search would settle a node
+// through it; then it goes back with its exact value. Returns the same optimum as
+// FindBestPath(graph, measure, see) on the checked graph, with far fewer checks: once a node is
+// settled, no other edge into it is checked. `exact(e)` says whether `see(e)` is exact;
+// `evaluate(edges)` checks the edges so that `see` is exact for them afterwards. The search
+// evaluates up to `batch` edges at a time (the most promising ones), so a parallel `evaluate`
+// keeps several threads busy. The path's edges are all exact on return.
+using ExactFn = std::function<bool(int edge)>;
+using EvaluateFn = std::function<void(const std::vector<int>& edges)>;
+struct LazySearchStats {
+  int64_t evaluations = 0;  // calls of `evaluate`
+  int64_t edges_evaluated = 0;
+};
+SearchResult FindBestPathLazy(const HGraph& graph, const Measure& measure, const SearchEdgeFn& see,
+                              const ExactFn& exact, const EvaluateFn& evaluate,
+                              const std::vector<double>* cost_to_go, int batch,
+                              LazySearchStats* stats);
 
 // The best path over the checked valid edges (every one with a profile if the measure needs
 // clearance), with its quality and objective.
