@@ -545,7 +545,7 @@ grpc::ServerUnaryReactor* PathMergerService::CreateSession(grpc::CallbackServerC
         if (!request->has_scene()) throw InputError("scene", "must be set");
         // Loads the scene now (or finds it loaded), so that a missing scene is reported here.
         scenes_.Get(request->scene(), "scene");
-        *response = sessions_.Create(request->scene());
+        *response = sessions_.Create(request->scene(), request->session_id());
       },
       /*on_worker=*/true);
   return call;
