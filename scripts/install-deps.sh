@@ -2,6 +2,7 @@
 # Installs the Debian 12 packages hgraph needs to build, test and run, and only those missing:
 # when everything is there it changes nothing and needs no privileges. Runs apt-get directly as
 # root (a container or a fresh machine has no sudo) and through sudo otherwise.
+# `install-deps.sh --build` installs only what building needs (the Dockerfile's build stage).
 set -euo pipefail
 export DEBIAN_FRONTEND=noninteractive
 packages=(
@@ -13,15 +14,16 @@ packages=(
   libcivetweb-dev libssl-dev zlib1g-dev
   python3 python3-grpcio python3-protobuf python3-grpc-tools python3-pytest python3-pip
   python3-setuptools python3-wheel
-  librsvg2-bin
-  # Deployment tests: nginx as the gRPC front (tests/integration/affinity_test.py).
-  nginx
 )
-# kubectl renders deploy/ (tests/deploy); Debian's kubernetes-client provides it, but an image
-# may already carry kubectl from another package (they conflict), so only when it is absent.
-command -v kubectl > /dev/null || packages+=(kubernetes-client)
-# npm installs buf (scripts/buf.sh); Debian's npm conflicts with a nodejs that bundles its own.
-command -v npm > /dev/null || packages+=(npm)
+if [ "${1:-}" != "--build" ]; then
+  # Tests: pictures (librsvg), nginx as the gRPC front (tests/deploy/affinity_test.py).
+  packages+=(librsvg2-bin nginx)
+  # kubectl renders deploy/ (tests/deploy); Debian's kubernetes-client provides it, but an
+  # image may already carry kubectl from another package (they conflict): only when absent.
+  command -v kubectl > /dev/null || packages+=(kubernetes-client)
+  # npm installs buf (scripts/buf.sh); Debian's npm conflicts with a nodejs that bundles its own.
+  command -v npm > /dev/null || packages+=(npm)
+fi
 
 missing=()
 for p in "${packages[@]}"; do
