@@ -127,6 +127,15 @@ MergeOptions MergeOptionsFromProto(const v1::MergeOptions& proto) {
     RequireNonNegative(proto.max_node_spacing(), "options.max_node_spacing");
     options.max_node_spacing = proto.max_node_spacing();
   }
+  switch (proto.evaluation()) {
+    case v1::EVALUATION_UNSPECIFIED:
+    case v1::EVALUATION_LAZY: options.evaluation = Evaluation::kLazy; break;
+    case v1::EVALUATION_EAGER: options.evaluation = Evaluation::kEager; break;
+    default:
+      throw InputError("options.evaluation",
+                       "unknown evaluation " + std::to_string(proto.evaluation()));
+  }
+  options.report_inputs = proto.report_inputs();
   return options;
 }
 
@@ -174,6 +183,7 @@ v1::InputReport InputReportToProto(const InputReport& report) {
       break;
   }
   proto.set_certified(report.certified);
+  proto.set_checked(report.checked);
   return proto;
 }
 
@@ -186,7 +196,8 @@ InputReport InputReportFromProto(const v1::InputReport& proto) {
                          proto.quality(), proto.valid() && proto.quality().min_clearance() > 0),
                      .waypoints = proto.waypoints(),
                      .invalid_at = proto.invalid_at(),
-                     .certified = proto.certified()};
+                     .certified = proto.certified(),
+                     .checked = proto.checked()};
   switch (proto.invalid_cause()) {
     case v1::InputReport::CAUSE_COLLISION: report.invalid_cause = InvalidCause::kCollision; break;
     case v1::InputReport::CAUSE_OUT_OF_BOUNDS:
@@ -218,6 +229,8 @@ v1::MergeResult MergeResultToProto(const MergeResult& result) {
   stats->set_radius(s.radius);
   stats->set_gap_init(s.gap_init);
   stats->set_gap_extend(s.gap_extend);
+  stats->set_search_rounds(s.search_rounds);
+  stats->set_node_clearances(s.node_clearances);
   const MergeTiming& t = result.timing;
   v1::Timing* timing = proto.mutable_timing();
   timing->set_validate_ms(t.validate_ms);
@@ -258,6 +271,8 @@ MergeResult MergeResultFromProto(const v1::MergeResult& proto) {
                             .collision_checks = s.collision_checks(),
                             .distance_queries = s.distance_queries(),
                             .edges_reused = s.edges_reused(),
+                            .search_rounds = s.search_rounds(),
+                            .node_clearances = s.node_clearances(),
                             .threads = s.threads(),
                             .alignments = s.alignments(),
                             .radius = s.radius(),

@@ -38,6 +38,11 @@ VARIANTS = {
     "edit-distance-neighborhood": merge_pb2.VARIANT_EDIT_DISTANCE_NEIGHBORHOOD,
 }
 
+EVALUATIONS = {
+    "lazy": merge_pb2.EVALUATION_LAZY,
+    "eager": merge_pb2.EVALUATION_EAGER,
+}
+
 
 class HgraphError(Exception):
     """A failed call: the canonical gRPC code and the server's message (which names the field)."""
@@ -325,6 +330,7 @@ class Client:
               k: Optional[float] = None, safety: Optional[float] = None,
               variant: Optional[str] = None, options: Optional[merge_pb2.MergeOptions] = None,
               max_node_spacing: Optional[float] = None,
+              evaluation: Optional[str] = None, report_inputs: Optional[bool] = None,
               session: Optional[str] = None,
               on_progress: Optional[Callable[[Progress], None]] = None,
               progress_interval_ms: int = 0, seed: int = 0,
@@ -332,14 +338,18 @@ class Client:
         """Merges the paths in the session (default: the current one), streaming progress.
 
         `max_node_spacing` subdivides long input edges in the H-Graph so that bridges can leave
-        an input mid-edge (MergeOptions.max_node_spacing)."""
+        an input mid-edge (MergeOptions.max_node_spacing). `evaluation` is "lazy" (the default:
+        only the edges the search wants are checked) or "eager"; `report_inputs` checks every
+        input edge so that every input report is complete (InputReport.checked)."""
         return self._recovering(lambda: self._merge(
             paths, measure=measure, k=k, safety=safety, variant=variant, options=options,
-            max_node_spacing=max_node_spacing, session=session, on_progress=on_progress,
+            max_node_spacing=max_node_spacing, evaluation=evaluation,
+            report_inputs=report_inputs, session=session, on_progress=on_progress,
             progress_interval_ms=progress_interval_ms, seed=seed, timeout=timeout), session)
 
-    def _merge(self, paths, *, measure, k, safety, variant, options, max_node_spacing, session,
-               on_progress, progress_interval_ms, seed, timeout) -> MergeOutcome:
+    def _merge(self, paths, *, measure, k, safety, variant, options, max_node_spacing,
+               evaluation, report_inputs, session, on_progress, progress_interval_ms, seed,
+               timeout) -> MergeOutcome:
         opts = merge_pb2.MergeOptions()
         if options is not None:
             opts.CopyFrom(options)
@@ -347,6 +357,10 @@ class Client:
             opts.variant = VARIANTS[variant]
         if max_node_spacing is not None:
             opts.max_node_spacing = max_node_spacing
+        if evaluation is not None:
+            opts.evaluation = EVALUATIONS[evaluation]
+        if report_inputs is not None:
+            opts.report_inputs = report_inputs
         request = service_pb2.MergePathsRequest(
             session=session or self.session or "", paths=make_paths(paths),
             measure=make_measure(measure, k, safety), options=opts, seed=seed,
