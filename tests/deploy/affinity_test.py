@@ -184,10 +184,19 @@ def main():
                                         for r in replicas})
         expect(len(used) >= 2, f"every session went to replicas {used}: no hashing")
 
-        # 2. Lose the replica of the first session.
+        # 2. Lose the replica of the first session (hgraph health, the image's HEALTHCHECK,
+        # tells a live replica from a stopped one).
         lost = home[clients[0].session]
+        target = f"127.0.0.1:{replicas[lost].port}"
+        health = subprocess.run([args.cli, "health", "--server", target], capture_output=True,
+                                text=True)
+        expect(health.returncode == 0 and "SERVING" in health.stdout,
+               f"hgraph health on a live replica: {health.returncode} {health.stdout}")
         replicas[lost].stop()
         print(f"stopped replica {lost}")
+        health = subprocess.run([args.cli, "health", "--server", target, "--timeout", "2"],
+                                capture_output=True, text=True)
+        expect(health.returncode == 1, f"hgraph health on a stopped replica: {health.returncode}")
         lost_clients = [c for c in clients if home[c.session] == lost]
         kept_clients = [c for c in clients if home[c.session] != lost]
 
