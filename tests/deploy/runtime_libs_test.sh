@@ -13,20 +13,30 @@ status=0
 fail() { echo "FAIL: $*"; status=1; }
 
 mapfile -t listed < <(grep -v '^#' "$list" | grep -v '^$')
-needed=()
+libs=()
 for binary in "$@"; do
   [ -x "$binary" ] || { fail "$binary is not built"; continue; }
   if ldd "$binary" | grep -q "not found"; then fail "$binary: $(ldd "$binary" | grep 'not found')"; fi
-  while read -r lib; do
-    # usrmerge: ldd may name /lib/... where dpkg knows /usr/lib/... (or the reverse).
-    owner=$(dpkg -S "$lib" 2> /dev/null || dpkg -S "$(readlink -f "$lib")" 2> /dev/null ||
-            dpkg -S "/usr$lib" 2> /dev/null || true)
-    if [ -z "$owner" ]; then
-      fail "$binary loads $lib, which no Debian package provides"
-      continue
-    fi
-    needed+=("${owner%%:*}")
-  done < <(ldd "$binary" | awk '/=> \// {print $3}')
+  mapfile -t -O "${#libs[@]}" libs < <(ldd "$binary" | awk '/=> \// {print $3}')
+done
+mapfile -t libs < <(printf '%s\n' "${libs[@]}" | sort -u)
+# One dpkg -S for every path (it reads the whole package database each time). usrmerge: ldd
+# may name /lib/... where dpkg knows /usr/lib/... or the resolved file, so ask for all three.
+candidates=()
+for lib in "${libs[@]}"; do candidates+=("$lib" "$(readlink -f "$lib")" "/usr$lib"); done
+owners=$(dpkg -S "${candidates[@]}" 2> /dev/null || true)
+needed=()
+for lib in "${libs[@]}"; do
+  owner=""
+  for path in "$lib" "$(readlink -f "$lib")" "/usr$lib"; do
+    owner=$(awk -v p="$path" -F': ' '$2 == p {print $1; exit}' <<< "$owners")
+    [ -n "$owner" ] && break
+  done
+  if [ -z "$owner" ]; then
+    fail "the binaries load $lib, which no Debian package provides"
+    continue
+  fi
+  needed+=("${owner%%:*}")
 done
 mapfile -t needed < <(printf '%s\n' "${needed[@]}" | sort -u)
 for package in "${needed[@]}"; do
