@@ -2,10 +2,16 @@
 # The demo: starts hgraph-server on a loopback port, plans three input paths with the paper's PRM
 # on the built-in grid scene through it, merges them for length (all-pairs on a subdivided
 # H-Graph) and writes a picture. Usage: scripts/demo.sh [BUILD_DIR] [OUT_DIR]
-# (defaults: build, a fresh temporary folder). Exits non-zero if any step fails.
+# (defaults: build, a fresh temporary folder). From a fresh clone it first installs the missing
+# Debian packages and builds the server and the CLI. Exits non-zero if any step fails.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
-build=$(cd "${1:-$root/build}" && pwd)
+build=${1:-$root/build}
+if [ ! -x "$build/hgraph-server" ] || [ ! -x "$build/hgraph" ]; then
+  bash "$root/scripts/install-deps.sh"
+  bash "$root/scripts/build.sh" "$build"
+fi
+build=$(cd "$build" && pwd)
 out=${2:-$(mktemp -d)}
 mkdir -p "$out"
 scene="$root/scenes/grid/scene.json"

@@ -1,16 +1,41 @@
 #!/usr/bin/env bash
-# Installs every Debian package hgraph needs to build, test and run. Run as root.
+# Installs the Debian 12 packages hgraph needs to build, test and run, and only those missing:
+# when everything is there it changes nothing and needs no privileges. Runs apt-get directly as
+# root (a container or a fresh machine has no sudo) and through sudo otherwise.
+# `install-deps.sh --build` installs only what building needs (the Dockerfile's build stage).
 set -euo pipefail
 export DEBIAN_FRONTEND=noninteractive
-SUDO=""
-if [ "$(id -u)" != "0" ]; then SUDO="sudo"; fi
-$SUDO apt-get update -q
-$SUDO apt-get install -y -q --no-install-recommends \
-  build-essential cmake ninja-build ccache pkg-config git \
-  libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler \
-  libfcl-dev libccd-dev liboctomap-dev libeigen3-dev libassimp-dev \
-  libspdlog-dev libfmt-dev libtbb-dev libompl-dev libboost-all-dev \
-  libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev \
-  libcivetweb-dev libssl-dev zlib1g-dev \
-  python3 python3-grpcio python3-protobuf python3-grpc-tools python3-pytest \
-  librsvg2-bin
+packages=(
+  build-essential cmake ninja-build ccache pkg-config git
+  libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler
+  libfcl-dev libccd-dev liboctomap-dev libeigen3-dev libassimp-dev
+  libspdlog-dev libfmt-dev libtbb-dev libompl-dev libboost-all-dev
+  libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev
+  libcivetweb-dev libssl-dev zlib1g-dev
+  python3 python3-grpcio python3-protobuf python3-grpc-tools python3-pytest python3-pip
+  python3-setuptools python3-wheel
+)
+if [ "${1:-}" != "--build" ]; then
+  # Tests: pictures (librsvg), nginx as the gRPC front (tests/deploy/affinity_test.py).
+  packages+=(librsvg2-bin nginx)
+  # kubectl renders deploy/ (tests/deploy); Debian's kubernetes-client provides it, but an
+  # image may already carry kubectl from another package (they conflict): only when absent.
+  command -v kubectl > /dev/null || packages+=(kubernetes-client)
+  # npm installs buf (scripts/buf.sh); Debian's npm conflicts with a nodejs that bundles its own.
+  command -v npm > /dev/null || packages+=(npm)
+fi
+
+missing=()
+for p in "${packages[@]}"; do
+  status=$(dpkg-query -W -f='${Status}' "$p" 2> /dev/null || true)
+  [ "$status" = "install ok installed" ] || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: every package is installed"
+  exit 0
+fi
+echo "install-deps: installing ${missing[*]}"
+SUDO=()
+if [ "$(id -u)" != "0" ]; then SUDO=(sudo); fi
+"${SUDO[@]}" apt-get update -q
+"${SUDO[@]}" apt-get install -y -q --no-install-recommends "${missing[@]}"

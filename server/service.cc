@@ -546,13 +546,16 @@ grpc::ServerUnaryReactor* PathMergerService::PutScene(grpc::CallbackServerContex
 grpc::ServerUnaryReactor* PathMergerService::CreateSession(grpc::CallbackServerContext* context,
                                                            const v1::CreateSessionRequest* request,
                                                            v1::Session* response) {
-  auto* call = new UnaryCall(this, context, "CreateSession", "");
+  // A client-chosen id names the session in the log line already.
+  auto* call = new UnaryCall(
+      this, context, "CreateSession",
+      request->session_id().empty() ? "" : "sessions/" + request->session_id().substr(0, 32));
   call->Run(
       [=, this](const CancelToken&) {
         if (!request->has_scene()) throw InputError("scene", "must be set");
         // Loads the scene now (or finds it loaded), so that a missing scene is reported here.
         scenes_.Get(request->scene(), "scene");
-        *response = sessions_.Create(request->scene());
+        *response = sessions_.Create(request->scene(), request->session_id());
       },
       /*on_worker=*/true);
   return call;

@@ -62,15 +62,26 @@ v1::Session SessionRegistry::ToProto(const std::string& name, const Record& reco
   return session;
 }
 
-v1::Session SessionRegistry::Create(const v1::Digest& scene) {
+v1::Session SessionRegistry::Create(const v1::Digest& scene, const std::string& id) {
+  const std::string name = std::string(kPrefix) + (id.empty() ? RandomHex128() : id);
+  if (!id.empty()) ValidateName(name, "session_id");
   std::lock_guard lock(mutex_);
+  if (auto it = sessions_.find(name);
+      it != sessions_.end() && it->second.expire_time > Clock::now()) {
+    if (it->second.scene.sha256() != scene.sha256() ||
+        it->second.scene.size_bytes() != scene.size_bytes()) {
+      throw Error(ErrorCode::kFailedPrecondition, "session_id",
+                  "session " + name + " already exists on another scene");
+    }
+    it->second.expire_time = Clock::now() + ttl_;
+    return ToProto(name, it->second);
+  }
   if (static_cast<int>(sessions_.size()) >= max_sessions_) {
     throw Error(ErrorCode::kResourceExhausted, "",
                 std::to_string(sessions_.size()) +
                     " sessions exist, the limit (--max-sessions); "
                     "delete one or let idle ones expire");
   }
-  const std::string name = std::string(kPrefix) + RandomHex128();
   const Clock::time_point now = Clock::now();
   Record& record = sessions_[name];
   record.scene = scene;

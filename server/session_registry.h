@@ -23,8 +23,12 @@ class SessionRegistry {
   SessionRegistry(const SessionRegistry&) = delete;
   SessionRegistry& operator=(const SessionRegistry&) = delete;
 
-  // Throws Error(kResourceExhausted) when --max-sessions sessions exist.
-  v1::Session Create(const v1::Digest& scene);
+  // A new session on `scene`, named "sessions/<id>" with `id` if given (32 lower-case hex
+  // digits; InputError("session_id") otherwise), else a random id. An existing session of that
+  // id on the same scene is returned as it is (a retried create), one on another scene throws
+  // Error(kFailedPrecondition). Throws Error(kResourceExhausted) when --max-sessions sessions
+  // exist.
+  v1::Session Create(const v1::Digest& scene, const std::string& id = "");
   // The session, its expiry extended (every use counts as activity). Throws InputError(field)
   // for a malformed name and Error(kNotFound, field) for an unknown or expired one.
   v1::Session Touch(const std::string& name, const std::string& field);

@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
       WithServer(AddRenderCommand(app), RemoteKind::kCheck),
       WithServer(AddImportCfgCommand(app), RemoteKind::kImportCfg),
       AddRequeryCommand(app),
+      AddHealthCommand(app),
   };
 
   try {

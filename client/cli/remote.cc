@@ -68,7 +68,8 @@ v1::Digest DigestOf(const std::string& bytes) {
 
 }  // namespace
 
-RemoteClient::RemoteClient(const std::string& target, double timeout_s) : timeout_s_(timeout_s) {
+RemoteClient::RemoteClient(const std::string& target, double timeout_s, const std::string& session)
+    : timeout_s_(timeout_s), session_(session.empty() ? "sessions/" + RandomHex128() : session) {
   grpc::ChannelArguments args;
   args.SetMaxReceiveMessageSize(64 << 20);
   args.SetMaxSendMessageSize(64 << 20);
@@ -77,6 +78,7 @@ RemoteClient::RemoteClient(const std::string& target, double timeout_s) : timeou
 }
 
 void RemoteClient::Prepare(grpc::ClientContext* context) const {
+  context->AddMetadata("x-hgraph-session", session_);
   if (timeout_s_ > 0) {
     context->set_deadline(std::chrono::system_clock::now() +
                           std::chrono::milliseconds(static_cast<int64_t>(timeout_s_ * 1e3)));
@@ -146,6 +148,7 @@ std::string RemoteClient::OpenSession(const v1::Digest& scene, const std::string
   }
   v1::CreateSessionRequest create;
   *create.mutable_scene() = scene;
+  create.set_session_id(session_.substr(session_.find('/') + 1));
   Check(stub_->CreateSession(&context, create, &out), "CreateSession");
   return out.name();
 }
@@ -251,7 +254,8 @@ std::string OpenScene(RemoteClient& client, CLI::App* app, const RemoteOptions& 
 // CheckPaths as a PathChecker: the scene is uploaded and the session opened on the first check.
 PathChecker RemotePathChecker(CLI::App* app, const RemoteOptions& remote) {
   struct State {
-    explicit State(const RemoteOptions& remote) : client(remote.server, remote.timeout_s) {}
+    explicit State(const RemoteOptions& remote)
+        : client(remote.server, remote.timeout_s, remote.session) {}
     RemoteClient client;
     std::string session;
   };
@@ -280,7 +284,7 @@ PathChecker RemotePathChecker(CLI::App* app, const RemoteOptions& remote) {
 }
 
 int RunRemoteMerge(CLI::App* app, const RemoteOptions& remote) {
-  RemoteClient client(remote.server, remote.timeout_s);
+  RemoteClient client(remote.server, remote.timeout_s, remote.session);
   v1::Scene scene;
   const std::string scene_file = Flag<std::string>(app, "--scene", "");
   const std::string session = OpenSceneFile(client, scene_file, remote, &scene);
@@ -364,7 +368,7 @@ int RunRemoteMerge(CLI::App* app, const RemoteOptions& remote) {
 }
 
 int RunRemotePlan(CLI::App* app, const RemoteOptions& remote) {
-  RemoteClient client(remote.server, remote.timeout_s);
+  RemoteClient client(remote.server, remote.timeout_s, remote.session);
   v1::Scene scene;
   v1::PlanPathsRequest request;
   request.set_session(OpenScene(client, app, remote, &scene));
@@ -412,7 +416,7 @@ int RunRemoteImportCfg(CLI::App* app, const RemoteOptions& remote) {
   const std::string cfg = Flag<std::string>(app, "cfg", "");
   v1::Scene scene;
   ParseJson(ToJson(ReadOmplAppProblem(cfg)), cfg, &scene);
-  RemoteClient client(remote.server, remote.timeout_s);
+  RemoteClient client(remote.server, remote.timeout_s, remote.session);
   const v1::Digest digest =
       client.UploadScene(std::move(scene), std::filesystem::path(cfg).parent_path().string());
   const std::string session = client.OpenSession(digest, remote.session);

@@ -20,16 +20,22 @@ namespace hgraph::cli {
 // canonical code ("NOT_FOUND: session: ..."). Not thread safe; not copyable.
 class RemoteClient {
  public:
-  // timeout_s > 0 sets a deadline on every call.
-  RemoteClient(const std::string& target, double timeout_s);
+  // timeout_s > 0 sets a deadline on every call. Every call carries `session` (or, when it is
+  // empty, the name of a new session chosen here: "sessions/<128 random bits>") in the
+  // `x-hgraph-session` metadata, from the first upload on, so that a load balancer hashing on it
+  // (deploy/nginx) sends the scene, the session and every later call to one replica.
+  RemoteClient(const std::string& target, double timeout_s, const std::string& session = "");
   RemoteClient(const RemoteClient&) = delete;
   RemoteClient& operator=(const RemoteClient&) = delete;
 
   // Replaces file-path meshes (relative to base_dir) by digests, uploads the missing blobs in
   // chunks, stores the scene and returns its digest.
   v1::Digest UploadScene(v1::Scene scene, const std::string& base_dir);
-  // `session` if given (checked with GetSession), else a new session on the scene.
+  // `session` if given (checked with GetSession), else a new session on the scene under the
+  // name chosen at construction (CreateSessionRequest.session_id).
   std::string OpenSession(const v1::Digest& scene, const std::string& session);
+  // The name sent in `x-hgraph-session`.
+  const std::string& session() const { return session_; }
 
   // Streams the merge; on_progress sees every progress event.
   v1::MergePathsResponse Merge(v1::MergePathsRequest request,
@@ -46,6 +52,7 @@ class RemoteClient {
   std::shared_ptr<grpc::Channel> channel_;
   std::unique_ptr<v1::PathMerger::Stub> stub_;
   double timeout_s_;
+  std::string session_;
 };
 
 // What --server does for a subcommand.
@@ -75,5 +82,7 @@ v1::Measure MeasureFromFlags(CLI::App* app);
 
 // `hgraph requery --server HOST:PORT --hgraph NAME --measure M`.
 Subcommand AddRequeryCommand(CLI::App& parent);
+// `hgraph health --server ADDR` (health_command.cc).
+Subcommand AddHealthCommand(CLI::App& parent);
 
 }  // namespace hgraph::cli

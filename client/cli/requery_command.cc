@@ -30,7 +30,9 @@ Subcommand AddRequeryCommand(CLI::App& parent) {
   app->add_option("--out", *out, "Write the MergeResult JSON here");
   app->add_option("--timeout", flags->timeout_s, "Deadline, seconds");
   return Subcommand{app, [app, flags, hgraph, out] {
-                      RemoteClient client(flags->server, flags->timeout_s);
+                      // The H-Graph's session names the replica that holds it.
+                      RemoteClient client(flags->server, flags->timeout_s,
+                                          hgraph->substr(0, hgraph->find("/hgraphs/")));
                       v1::RequeryRequest request;
                       request.set_hgraph(*hgraph);
                       try {

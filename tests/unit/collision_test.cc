@@ -11,6 +11,7 @@
 #include <numbers>
 #include <random>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <thread>
 #include <vector>
@@ -82,8 +83,9 @@ struct Disc {
 };
 
 std::vector<Disc> LoadDiscs() {
-  std::ifstream in(std::string(HGRAPH_SHARED_DATA_DIR) + "/ompl-2d/circle_obstacles.txt");
-  EXPECT_TRUE(in.good());
+  const std::string file = std::string(HGRAPH_TEST_DATA_DIR) + "/ompl-2d/circle_obstacles.txt";
+  std::ifstream in(file);
+  if (!in) throw std::runtime_error("cannot open test data file " + file);
   std::string line;
   std::getline(in, line);
   std::getline(in, line);

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <fstream>
 #include <random>
+#include <stdexcept>
 #include <string>
 #include <thread>
 #include <vector>
@@ -41,8 +42,9 @@ std::shared_ptr<const CollisionWorld> PointWorld(std::vector<Obstacle> obstacles
 // The OMPL circle discs, with a 2 x 0.6 rectangle turning in SE(2): the certificate must account
 // for rotation (BodyRadius), not only translation.
 std::shared_ptr<const CollisionWorld> CircleWorld() {
-  std::ifstream in(std::string(HGRAPH_SHARED_DATA_DIR) + "/ompl-2d/circle_obstacles.txt");
-  EXPECT_TRUE(in.good());
+  const std::string file = std::string(HGRAPH_TEST_DATA_DIR) + "/ompl-2d/circle_obstacles.txt";
+  std::ifstream in(file);
+  if (!in) throw std::runtime_error("cannot open test data file " + file);
   std::string line;
   std::getline(in, line);
   std::getline(in, line);

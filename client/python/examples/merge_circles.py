@@ -2,8 +2,8 @@
 """Merges the two input paths of OMPL's circles problem on a running hgraph server, then
 re-queries the same H-Graph for clearance without new collision checks.
 
-    PYTHONPATH=client/python:build/python /usr/bin/python3 \
-        client/python/examples/merge_circles.py --server localhost:50051
+    /usr/bin/python3 -m pip install ./client/python   # or PYTHONPATH=client/python:build/python
+    /usr/bin/python3 client/python/examples/merge_circles.py --server localhost:50051
 """
 import argparse
 import pathlib

@@ -8,8 +8,12 @@
         again = client.requery(merged.hgraph, measure="inverse-clearance")
         checked = client.check(paths)  # each path as a merge checks its inputs
 
-The generated modules (hgraph.v1.*_pb2, *_pb2_grpc) are built by CMake into
-<build>/python; put that folder and this one on PYTHONPATH.
+Install: `/usr/bin/python3 -m pip install ./client/python` (the hgraph.v1 stubs are generated
+while it builds; README.md beside pyproject.toml). In a build tree, CMake also builds them into
+<build>/python: put that folder and this one on PYTHONPATH.
+
+Every call carries the session's name in `x-hgraph-session` (session affinity behind a load
+balancer); merge, check and plan recover from a lost replica with retries and backoff (Client).
 """
 from hgraph_client.client import (CheckOutcome, Client, HgraphError, MergeOutcome, Progress,
                                   connect, load_paths_text, make_measure, make_paths)

@@ -4,6 +4,8 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import pathlib
+import secrets
+import time
 from typing import Callable, Iterable, Iterator, Optional, Sequence, Union
 
 import grpc
@@ -13,6 +15,13 @@ from hgraph.v1 import merge_pb2, path_pb2, scene_pb2, service_pb2, service_pb2_g
 
 # Uploads are chunked well below gRPC's default 4 MiB message limit.
 CHUNK_BYTES = 1 << 20
+
+# The request metadata a load balancer hashes on to keep a session on one replica (deploy/).
+SESSION_METADATA = "x-hgraph-session"
+
+# Codes after which a session call is worth repeating on a fresh session: the replica that held
+# the session is gone (UNAVAILABLE), or the call reached a replica that never saw it (NOT_FOUND).
+RECOVERABLE = (grpc.StatusCode.UNAVAILABLE, grpc.StatusCode.NOT_FOUND)
 
 MEASURES = {
     "length": merge_pb2.Measure.TYPE_LENGTH,
@@ -136,9 +145,25 @@ def _raise(error: grpc.RpcError) -> None:
 
 
 class Client:
-    """One channel to an hgraph server. Not thread safe (holds the current session)."""
+    """One channel to an hgraph server, or to a load balancer in front of several replicas.
+    Not thread safe (holds the current session).
 
-    def __init__(self, target: str, *, max_message_bytes: int = 64 << 20):
+    Session affinity: the client names its session before it exists ("sessions/<128 random
+    bits>", `session_name`; CreateSessionRequest.session_id) and sends that name in the
+    `x-hgraph-session` metadata of every call, from the first upload on, so that a balancer
+    hashing on it (deploy/base/nginx/hgraph.conf) sends the scene, the session and every later
+    call to the same replica.
+
+    Recovery: when a merge, check or plan fails with UNAVAILABLE or NOT_FOUND (the replica was
+    lost, and the balancer now sends the session's calls to another one), the client waits
+    (exponential backoff: `backoff_s`, doubled each attempt, at most `retries` attempts),
+    uploads the scene again (only the blobs the new replica lacks), re-creates the session under
+    the same name and repeats the call. H-Graphs of the lost session are gone: a requery on one
+    raises NOT_FOUND; merge again. `retries=0` turns recovery off.
+    """
+
+    def __init__(self, target: str, *, max_message_bytes: int = 64 << 20, retries: int = 4,
+                 backoff_s: float = 0.2):
         self.target = target
         self.channel = grpc.insecure_channel(target, options=[
             ("grpc.max_receive_message_length", max_message_bytes),
@@ -146,6 +171,39 @@ class Client:
         ])
         self.stub = service_pb2_grpc.PathMergerStub(self.channel)
         self.session: Optional[str] = None
+        self.session_name = "sessions/" + secrets.token_hex(16)
+        self.retries = retries
+        self.backoff_s = backoff_s
+        self.recoveries = 0  # sessions re-created after a lost replica
+        self._scene: Optional[tuple] = None  # (scene, base_dir) of the last upload_scene
+
+    def _metadata(self, name: Optional[str] = None) -> tuple:
+        return ((SESSION_METADATA, name or self.session or self.session_name),)
+
+    def _recovering(self, call: Callable[[], object], explicit_session: Optional[str]):
+        """Runs call(); on a recoverable error restores the current session and runs it again."""
+        attempt = 0
+        while True:
+            try:
+                return call()
+            except HgraphError as e:
+                if (e.code not in RECOVERABLE or attempt >= self.retries or
+                        explicit_session not in (None, self.session) or self._scene is None or
+                        self.session is None):
+                    raise
+            time.sleep(self.backoff_s * (2 ** attempt))
+            attempt += 1
+            try:
+                self._restore_session()
+            except HgraphError as e:
+                if e.code not in RECOVERABLE or attempt >= self.retries:
+                    raise
+
+    def _restore_session(self) -> None:
+        scene, base_dir = self._scene
+        digest = self.upload_scene(scene, base_dir)
+        self.create_session(digest, session_id=self.session.split("/", 1)[1])
+        self.recoveries += 1
 
     def close(self) -> None:
         self.channel.close()
@@ -167,7 +225,7 @@ class Client:
                 yield service_pb2.UploadBlobRequest(data=data[at:at + CHUNK_BYTES])
 
         try:
-            self.stub.UploadBlob(chunks(), timeout=timeout)
+            self.stub.UploadBlob(chunks(), timeout=timeout, metadata=self._metadata())
         except grpc.RpcError as e:
             _raise(e)
         return digest
@@ -180,6 +238,7 @@ class Client:
         Meshes given by file path (relative to the scene file's folder, or `base_dir`) are
         replaced by their digests; only the blobs the server lacks are uploaded.
         """
+        self._scene = (scene, base_dir)
         if isinstance(scene, scene_pb2.Scene):
             proto = scene_pb2.Scene()
             proto.CopyFrom(scene)
@@ -201,30 +260,54 @@ class Client:
         try:
             if blobs:
                 missing = self.stub.FindMissingBlobs(service_pb2.FindMissingBlobsRequest(
-                    digests=[d for d, _ in blobs.values()]), timeout=timeout).missing
+                    digests=[d for d, _ in blobs.values()]), timeout=timeout,
+                    metadata=self._metadata()).missing
                 for digest in missing:
                     self.upload_blob(blobs[digest.sha256][1], timeout=timeout)
             return self.stub.PutScene(service_pb2.PutSceneRequest(scene=proto),
-                                      timeout=timeout).digest
+                                      timeout=timeout, metadata=self._metadata()).digest
         except grpc.RpcError as e:
             _raise(e)
 
     # Sessions ---------------------------------------------------------------------------------
 
-    def create_session(self, scene: scene_pb2.Digest,
-                       timeout: Optional[float] = None) -> service_pb2.Session:
-        """Creates a session on the scene and makes it the client's current session."""
+    def create_session(self, scene: scene_pb2.Digest, timeout: Optional[float] = None,
+                       session_id: Optional[str] = None) -> service_pb2.Session:
+        """Creates a session on the scene and makes it the client's current session.
+
+        Its name is `session_name` (chosen by the client; a later create_session chooses a new
+        one), or "sessions/<session_id>"."""
+        if session_id is None:
+            if self.session is not None:
+                self.session_name = "sessions/" + secrets.token_hex(16)
+            session_id = self.session_name.split("/", 1)[1]
+        name = "sessions/" + session_id
+        request = service_pb2.CreateSessionRequest(scene=scene, session_id=session_id)
         try:
-            session = self.stub.CreateSession(service_pb2.CreateSessionRequest(scene=scene),
-                                              timeout=timeout)
+            try:
+                session = self.stub.CreateSession(request, timeout=timeout,
+                                                  metadata=self._metadata(name))
+            except grpc.RpcError as e:
+                # A new name may hash to a replica that has not seen the scene: store it there.
+                if e.code() != grpc.StatusCode.NOT_FOUND or self._scene is None:
+                    raise
+                self.session, previous = None, self.session
+                self.session_name = name
+                try:
+                    self.upload_scene(*self._scene, timeout=timeout)
+                finally:
+                    self.session = previous
+                session = self.stub.CreateSession(request, timeout=timeout,
+                                                  metadata=self._metadata(name))
         except grpc.RpcError as e:
             _raise(e)
-        self.session = session.name
+        self.session = self.session_name = session.name
         return session
 
     def get_session(self, name: Optional[str] = None) -> service_pb2.Session:
         try:
-            return self.stub.GetSession(service_pb2.GetSessionRequest(name=name or self.session))
+            return self.stub.GetSession(service_pb2.GetSessionRequest(name=name or self.session),
+                                        metadata=self._metadata(name))
         except grpc.RpcError as e:
             _raise(e)
 
@@ -236,7 +319,8 @@ class Client:
 
     def delete_session(self, name: Optional[str] = None) -> None:
         try:
-            self.stub.DeleteSession(service_pb2.DeleteSessionRequest(name=name or self.session))
+            self.stub.DeleteSession(service_pb2.DeleteSessionRequest(name=name or self.session),
+                                    metadata=self._metadata(name))
         except grpc.RpcError as e:
             _raise(e)
 
@@ -259,6 +343,16 @@ class Client:
         only the edges the search wants are checked) or "eager"; `report_inputs` checks every
         input edge so that every input report is complete (InputReport.checked); `optimize_ms`
         bounds the post-optimization (0 = off; unset = automatic)."""
+        return self._recovering(lambda: self._merge(
+            paths, measure=measure, k=k, safety=safety, variant=variant, options=options,
+            max_node_spacing=max_node_spacing, evaluation=evaluation,
+            report_inputs=report_inputs, optimize_ms=optimize_ms, session=session,
+            on_progress=on_progress, progress_interval_ms=progress_interval_ms, seed=seed,
+            timeout=timeout), session)
+
+    def _merge(self, paths, *, measure, k, safety, variant, options, max_node_spacing,
+               evaluation, report_inputs, optimize_ms, session, on_progress,
+               progress_interval_ms, seed, timeout) -> MergeOutcome:
         opts = merge_pb2.MergeOptions()
         if options is not None:
             opts.CopyFrom(options)
@@ -278,7 +372,8 @@ class Client:
             progress_interval_ms=progress_interval_ms)
         events = 0
         try:
-            for event in self.stub.MergePaths(request, timeout=timeout):
+            for event in self.stub.MergePaths(request, timeout=timeout,
+                                              metadata=self._metadata(request.session)):
                 if event.HasField("progress"):
                     events += 1
                     if on_progress is not None:
@@ -294,7 +389,8 @@ class Client:
     def merge_stream(self, request: service_pb2.MergePathsRequest,
                      timeout: Optional[float] = None):
         """The raw response stream (a grpc call object: iterate it, or .cancel() it)."""
-        return self.stub.MergePaths(request, timeout=timeout)
+        return self.stub.MergePaths(request, timeout=timeout,
+                                    metadata=self._metadata(request.session))
 
     def requery(self, hgraph: str, measure: Union[str, merge_pb2.Measure] = "length", *,
                 k: Optional[float] = None, safety: Optional[float] = None,
@@ -302,7 +398,8 @@ class Client:
         """Searches a stored H-Graph under another measure, reusing its checked edges."""
         try:
             return self.stub.Requery(service_pb2.RequeryRequest(
-                hgraph=hgraph, measure=make_measure(measure, k, safety)), timeout=timeout).result
+                hgraph=hgraph, measure=make_measure(measure, k, safety)), timeout=timeout,
+                metadata=self._metadata(hgraph.split("/hgraphs/", 1)[0])).result
         except grpc.RpcError as e:
             _raise(e)
 
@@ -314,16 +411,20 @@ class Client:
         The paths need not share endpoints; a path of one waypoint is checked where it stands.
         `sampled` asks for the collision test at the samples only (no clearance, no certificate).
         """
-        request = service_pb2.CheckPathsRequest(
-            session=session or self.session or "", paths=make_paths(paths), sampled=sampled)
-        if resolution is not None:
-            request.resolution = resolution
-        if k is not None:
-            request.k = k
-        try:
-            response = self.stub.CheckPaths(request, timeout=timeout)
-        except grpc.RpcError as e:
-            _raise(e)
+        def call():
+            request = service_pb2.CheckPathsRequest(
+                session=session or self.session or "", paths=make_paths(paths), sampled=sampled)
+            if resolution is not None:
+                request.resolution = resolution
+            if k is not None:
+                request.k = k
+            try:
+                return self.stub.CheckPaths(request, timeout=timeout,
+                                            metadata=self._metadata(request.session))
+            except grpc.RpcError as e:
+                _raise(e)
+
+        response = self._recovering(call, session)
         return CheckOutcome(list(response.paths), response.collision_checks,
                             response.distance_queries, response.resolution, response.elapsed_ms)
 
@@ -332,17 +433,21 @@ class Client:
              start: Optional[Sequence[float]] = None, goal: Optional[Sequence[float]] = None,
              timeout: Optional[float] = None) -> list:
         """Plans input paths with the server's OMPL planners; returns the Path messages."""
-        request = service_pb2.PlanPathsRequest(
-            session=session or self.session or "", planner=planner, count=count,
-            time_per_path_s=time_per_path_s, seed=seed, simplify=simplify)
-        if start is not None:
-            request.start.values.extend(start)
-        if goal is not None:
-            request.goal.values.extend(goal)
-        try:
-            return [event.path for event in self.stub.PlanPaths(request, timeout=timeout)]
-        except grpc.RpcError as e:
-            _raise(e)
+        def call():
+            request = service_pb2.PlanPathsRequest(
+                session=session or self.session or "", planner=planner, count=count,
+                time_per_path_s=time_per_path_s, seed=seed, simplify=simplify)
+            if start is not None:
+                request.start.values.extend(start)
+            if goal is not None:
+                request.goal.values.extend(goal)
+            try:
+                return [event.path for event in self.stub.PlanPaths(
+                    request, timeout=timeout, metadata=self._metadata(request.session))]
+            except grpc.RpcError as e:
+                _raise(e)
+
+        return self._recovering(call, session)
 
 
 def connect(target: str, *, wait_s: float = 10.0, **kwargs) -> Client:

@@ -1,0 +1,249 @@
+#!/usr/bin/env python3
+"""Session affinity through nginx, and surviving the loss of a replica.
+
+Starts three hgraph-server processes and Debian's nginx on loopback ports chosen now, with
+deploy/base/nginx/hgraph.conf as the front (its listen port and upstream list templated for
+loopback), then:
+  1. runs several sessions through nginx with the Python client (and one with the CLI) and
+     checks from the replicas' logs that every call of a session reached one replica, and that
+     the sessions spread over more than one replica;
+  2. stops the replica that holds the first session: a client without retries gets NOT_FOUND
+     or UNAVAILABLE; clients with retries re-upload the scene by digest, re-create their session
+     on another replica, retry, and their merges succeed; the sessions on the other replicas
+     are untouched.
+Usage: affinity_test.py --server-bin B --cli B --deploy DIR --data DIR. Exits 77 without nginx.
+"""
+import argparse
+import pathlib
+import random
+import re
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+
+import grpc
+
+import hgraph_client
+
+SKIP = 77
+
+
+class Replica:
+    def __init__(self, binary, index):
+        self.index = index
+        self.proc = subprocess.Popen(
+            [binary, "--listen", "127.0.0.1:0", "--metrics-listen", "", "--threads", "1",
+             "--drain-s", "0", "--grace-s", "2"],
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        line = self.proc.stdout.readline()
+        match = re.search(r"grpc_port=(\d+)", line)
+        if not match:
+            self.proc.kill()
+            raise RuntimeError(f"replica {index} did not start: {line!r}")
+        self.port = int(match.group(1))
+        self.log = []
+        threading.Thread(target=lambda: self.log.extend(self.proc.stderr), daemon=True).start()
+
+    def sessions(self):
+        """Session names in this replica's call log lines ("<Method> session=<name> ...")."""
+        names = set()
+        for line in list(self.log):
+            m = re.search(r" session=(sessions/[0-9a-f]{32})", line)
+            if m:
+                names.add(m.group(1))
+        return names
+
+    def calls(self, session):
+        return [l for l in list(self.log) if f" session={session}" in l]
+
+    def stop(self):
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGTERM)
+            self.proc.wait(timeout=30)
+
+
+def free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def start_nginx(deploy, replicas, work):
+    nginx = shutil.which("nginx") or ("/usr/sbin/nginx" if pathlib.Path("/usr/sbin/nginx").exists()
+                                      else None)
+    if nginx is None:
+        return None, None
+    port = free_port()
+    conf = work / "conf"
+    (conf / "conf.d").mkdir(parents=True)
+    for d in ("body", "proxy", "fastcgi", "uwsgi", "scgi"):
+        (work / "tmp" / d).mkdir(parents=True)
+    front = (deploy / "base" / "nginx" / "hgraph.conf").read_text()
+    templated, n = re.subn(r"listen 50051 http2;", f"listen 127.0.0.1:{port} http2;", front)
+    assert n == 1, "deploy/base/nginx/hgraph.conf: no 'listen 50051 http2;' to template"
+    (conf / "conf.d" / "hgraph.conf").write_text(templated)
+    # The Kubernetes upstream line, with its name:port replaced by each replica's.
+    k8s = [l for l in (deploy / "base" / "nginx" / "upstreams.inc").read_text().splitlines()
+           if l.startswith("server ")]
+    assert len(k8s) == 1, "deploy/base/nginx/upstreams.inc: expected one server line"
+    (conf / "conf.d" / "upstreams.inc").write_text("".join(
+        re.sub(r"server \S+", f"server 127.0.0.1:{r.port}", k8s[0]) + "\n" for r in replicas))
+    (conf / "nginx.conf").write_text(f"""
+daemon off;
+worker_processes 1;
+pid {work}/nginx.pid;
+error_log {work}/error.log info;
+events {{ worker_connections 256; }}
+http {{
+    access_log {work}/access.log;
+    client_body_temp_path {work}/tmp/body;
+    proxy_temp_path {work}/tmp/proxy;
+    fastcgi_temp_path {work}/tmp/fastcgi;
+    uwsgi_temp_path {work}/tmp/uwsgi;
+    scgi_temp_path {work}/tmp/scgi;
+    include conf.d/hgraph.conf;
+}}
+""")
+    proc = subprocess.Popen([nginx, "-p", str(work), "-c", str(conf / "nginx.conf"),
+                             "-e", str(work / "error.log")],
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    for _ in range(100):
+        if proc.poll() is not None:
+            raise RuntimeError("nginx exited: " + proc.stdout.read() +
+                               (work / "error.log").read_text())
+        try:
+            socket.create_connection(("127.0.0.1", port), timeout=1).close()
+            return proc, f"127.0.0.1:{port}"
+        except OSError:
+            time.sleep(0.1)
+    proc.kill()
+    raise RuntimeError("nginx did not listen")
+
+
+def main():
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--server-bin", required=True)
+    parser.add_argument("--cli", required=True)
+    parser.add_argument("--deploy", required=True, type=pathlib.Path)
+    parser.add_argument("--data", required=True, type=pathlib.Path)
+    args = parser.parse_args()
+    if shutil.which("nginx") is None and not pathlib.Path("/usr/sbin/nginx").exists():
+        print("SKIP: nginx is not installed (scripts/install-deps.sh installs it)")
+        return SKIP
+
+    scene = args.data / "circles" / "scene.json"
+    paths = hgraph_client.load_paths_text((args.data / "circles" / "paths.txt").read_text())
+    failures = []
+
+    def expect(ok, what):
+        if not ok:
+            failures.append(what)
+            print("FAIL:", what)
+
+    replicas = [Replica(args.server_bin, i) for i in range(3)]
+    work = pathlib.Path(tempfile.mkdtemp(prefix="hgraph-affinity-"))
+    nginx = None
+    clients = []
+    try:
+        nginx, front = start_nginx(args.deploy, replicas, work)
+        print(f"nginx on {front}; replicas on ports {[r.port for r in replicas]}")
+
+        # 1. Sessions through nginx, named from a seeded generator (the test is repeatable).
+        rng = random.Random(7)
+        for i in range(8):
+            c = hgraph_client.connect(front, backoff_s=0.1)
+            c.session_name = "sessions/%032x" % rng.getrandbits(128)
+            c.create_session(c.upload_scene(scene))
+            outcome = c.merge(paths, measure="length", variant="edit-distance")
+            expect(outcome.result.path.waypoints, f"session {i}: empty merge")
+            c.check(paths)
+            clients.append(c)
+        cli = subprocess.run([args.cli, "check", "--server", front, "--scene", str(scene),
+                              "--paths", str(args.data / "circles" / "paths.txt")],
+                             capture_output=True, text=True)
+        expect(cli.returncode == 0, f"CLI check through nginx: {cli.returncode} {cli.stderr}")
+        cli_session = re.search(r"session (sessions/[0-9a-f]{32})", cli.stderr)
+        expect(cli_session is not None, f"CLI printed no session: {cli.stderr}")
+        names = [c.session for c in clients] + ([cli_session.group(1)] if cli_session else [])
+
+        home = {}
+        for name in names:
+            holders = [r.index for r in replicas if r.calls(name)]
+            expect(len(holders) == 1, f"{name}: calls reached replicas {holders}, not one")
+            if holders:
+                home[name] = holders[0]
+                # CreateSession, MergePaths and CheckPaths (CLI: CreateSession, CheckPaths).
+                expect(len(replicas[holders[0]].calls(name)) >= 2, f"{name}: too few calls")
+        used = set(home.values())
+        print("sessions per replica:", {r.index: sum(1 for h in home.values() if h == r.index)
+                                        for r in replicas})
+        expect(len(used) >= 2, f"every session went to replicas {used}: no hashing")
+
+        # 2. Lose the replica of the first session (hgraph health, the image's HEALTHCHECK,
+        # tells a live replica from a stopped one).
+        lost = home[clients[0].session]
+        target = f"127.0.0.1:{replicas[lost].port}"
+        health = subprocess.run([args.cli, "health", "--server", target], capture_output=True,
+                                text=True)
+        expect(health.returncode == 0 and "SERVING" in health.stdout,
+               f"hgraph health on a live replica: {health.returncode} {health.stdout}")
+        replicas[lost].stop()
+        print(f"stopped replica {lost}")
+        health = subprocess.run([args.cli, "health", "--server", target, "--timeout", "2"],
+                                capture_output=True, text=True)
+        expect(health.returncode == 1, f"hgraph health on a stopped replica: {health.returncode}")
+        lost_clients = [c for c in clients if home[c.session] == lost]
+        kept_clients = [c for c in clients if home[c.session] != lost]
+
+        bare = hgraph_client.Client(front, retries=0)
+        bare.session = lost_clients[0].session
+        try:
+            bare.check(paths)
+            expect(False, "a call on the lost session succeeded without recovery")
+        except hgraph_client.HgraphError as e:
+            expect(e.code in (grpc.StatusCode.NOT_FOUND, grpc.StatusCode.UNAVAILABLE),
+                   f"lost session: {e.code.name}, expected NOT_FOUND or UNAVAILABLE")
+            print(f"without retries: {e.code.name}: {e.message[:100]}")
+        bare.close()
+
+        for c in clients:
+            before = c.recoveries
+            outcome = c.merge(paths, measure="length", variant="edit-distance")
+            expect(len(outcome.result.path.waypoints) >= 2, f"{c.session}: merge after loss")
+            if c in lost_clients:
+                expect(c.recoveries == before + 1, f"{c.session}: not re-created once")
+                now = [r.index for r in replicas if r.index != lost and r.calls(c.session)]
+                expect(len(now) == 1, f"{c.session}: re-created on replicas {now}, not one")
+            else:
+                expect(c.recoveries == before, f"{c.session}: recovered although its replica lives")
+                expect([r.index for r in replicas if r.calls(c.session)] == [home[c.session]],
+                       f"{c.session}: moved although its replica lives")
+        print(f"{len(lost_clients)} sessions re-created after the loss, {len(kept_clients)} kept")
+    finally:
+        for c in clients:
+            c.close()
+        if nginx is not None:
+            nginx.send_signal(signal.SIGQUIT)
+            try:
+                nginx.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                nginx.kill()
+        for r in replicas:
+            r.stop()
+        if failures:
+            for r in replicas:
+                print(f"--- replica {r.index} log\n" + "".join(r.log[-30:]))
+            if (work / "error.log").exists():
+                print("--- nginx error.log\n" + (work / "error.log").read_text()[-3000:])
+        shutil.rmtree(work, ignore_errors=True)
+    print(f"{len(failures)} problems")
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
