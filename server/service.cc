@@ -283,7 +283,7 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
     const v1::Session session = service_->sessions_.Touch(request.session(), "session");
     CheckBatchLimits(request.paths(), service_->options());
     if (request.paths().paths_size() == 0) throw InputError("paths.paths", "must not be empty");
-    LoadedScene scene = service_->scenes_.Get(session.scene(), "session");
+    LoadedScene scene = service_->scenes_.Get(session.scene(), "session", token_);
     token_.ThrowIfStopped();
 
     MergeRequest merge{.paths = PathsFromProto(request.paths()),
@@ -391,7 +391,7 @@ PathMergerService::PathMergerService(const ServerOptions& options, Metrics& metr
     : options_(options),
       metrics_(metrics),
       cache_(options.cache_bytes),
-      scenes_(cache_, metrics),
+      scenes_(cache_, metrics, MeshImporter(options.mesh_import)),
       sessions_(options.max_sessions, options.session_ttl),
       pool_(options.threads, options.max_admitted) {
   metrics_.DeclareCounter("grpc_server_started_total", "RPCs started on the server.");
@@ -528,9 +528,9 @@ grpc::ServerUnaryReactor* PathMergerService::PutScene(grpc::CallbackServerContex
                                                       v1::PutSceneResponse* response) {
   auto* call = new UnaryCall(this, context, "PutScene", "");
   call->Run(
-      [=, this](const CancelToken&) {
+      [=, this](const CancelToken& token) {
         if (!request->has_scene()) throw InputError("scene", "must be set");
-        *response->mutable_digest() = scenes_.PutScene(request->scene());
+        *response->mutable_digest() = scenes_.PutScene(request->scene(), token);
       },
       /*on_worker=*/true);
   return call;
@@ -541,10 +541,10 @@ grpc::ServerUnaryReactor* PathMergerService::CreateSession(grpc::CallbackServerC
                                                            v1::Session* response) {
   auto* call = new UnaryCall(this, context, "CreateSession", "");
   call->Run(
-      [=, this](const CancelToken&) {
+      [=, this](const CancelToken& token) {
         if (!request->has_scene()) throw InputError("scene", "must be set");
         // Loads the scene now (or finds it loaded), so that a missing scene is reported here.
-        scenes_.Get(request->scene(), "scene");
+        scenes_.Get(request->scene(), "scene", token);
         *response = sessions_.Create(request->scene());
       },
       /*on_worker=*/true);
@@ -621,7 +621,7 @@ grpc::ServerUnaryReactor* PathMergerService::CheckPaths(grpc::CallbackServerCont
       [=, this](const CancelToken& token) {
         const v1::Session session = sessions_.Touch(request->session(), "session");
         CheckBatchLimits(request->paths(), options_);
-        LoadedScene scene = scenes_.Get(session.scene(), "session");
+        LoadedScene scene = scenes_.Get(session.scene(), "session", token);
         token.ThrowIfStopped();
         const double resolution =
             request->has_resolution() ? request->resolution() : SceneResolution(*scene.proto);
@@ -691,7 +691,7 @@ class PathMergerService::PlanCall final : public grpc::ServerWriteReactor<v1::Pl
                   std::to_string(request.count()) + " paths exceed the limit of " +
                       std::to_string(service_->options().max_paths) + " (--max-paths)");
     }
-    LoadedScene scene = service_->scenes_.Get(session.scene(), "session");
+    LoadedScene scene = service_->scenes_.Get(session.scene(), "session", token_);
     const Scene& model = scene.world->scene();
     PlanRequest plan{.planner = request.planner().empty()
                                     ? PlannerType::kRRTConnect

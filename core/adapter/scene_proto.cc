@@ -1,5 +1,6 @@
 #include "core/adapter/scene_proto.h"
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <filesystem>
@@ -102,8 +103,9 @@ std::string NormalizeFormat(const std::string& format) {
 // many obstacles, and assimp parsing dominates the load time.
 class ShapeConverter {
  public:
-  ShapeConverter(std::string base_dir, const BlobResolver& resolver)
-      : base_dir_(std::move(base_dir)), resolver_(resolver) {}
+  ShapeConverter(std::string base_dir, const BlobResolver& resolver,
+                 const MeshBytesLoader& load_bytes)
+      : base_dir_(std::move(base_dir)), resolver_(resolver), load_bytes_(load_bytes) {}
 
   Shape Convert(const v1::Shape& proto, const std::string& field) {
     const Eigen::Vector3d scale = Scale(proto, field + ".scale");
@@ -190,7 +192,7 @@ class ShapeConverter {
         if (mesh.data().empty()) throw InputError(field + ".data", "empty mesh data");
         shape->source =
             "inline " + format + " data (" + std::to_string(mesh.data().size()) + " bytes)";
-        shape->mesh = LoadMeshBytes(mesh.data(), format, options, field + ".data");
+        shape->mesh = LoadBytes(mesh.data(), format, options, field + ".data");
         return;
       }
       case v1::MeshRef::kDigest: {
@@ -210,7 +212,7 @@ class ShapeConverter {
             throw Error(ErrorCode::kNotFound, f,
                         "blob sha256:" + mesh.digest().sha256() + " has not been uploaded");
           }
-          cached = LoadMeshBytes(*bytes, format, options, f);
+          cached = LoadBytes(*bytes, format, options, f);
         }
         shape->mesh = cached;
         return;
@@ -220,6 +222,12 @@ class ShapeConverter {
     }
   }
 
+  std::shared_ptr<const Mesh> LoadBytes(const std::string& bytes, const std::string& format,
+                                        const MeshLoadOptions& options, const std::string& field) {
+    if (load_bytes_) return load_bytes_(bytes, format, options, field);
+    return LoadMeshBytes(bytes, format, options, field);
+  }
+
   static std::string RequireFormat(const v1::MeshRef& mesh, const std::string& field,
                                    const std::string& what) {
     const std::string format = NormalizeFormat(mesh.format());
@@ -227,11 +235,18 @@ class ShapeConverter {
       throw InputError(field + ".format",
                        "required for " + what + " (a file extension such as \"obj\")");
     }
+    if (format.size() > 16 ||
+        !std::all_of(format.begin(), format.end(),
+                     [](char c) { return std::isalnum(static_cast<unsigned char>(c)) != 0; })) {
+      throw InputError(field + ".format",
+                       "must be a file extension of 1 to 16 letters and digits (such as \"obj\")");
+    }
     return format;
   }
 
   std::string base_dir_;
   const BlobResolver& resolver_;
+  const MeshBytesLoader& load_bytes_;
   std::map<std::string, std::shared_ptr<const Mesh>> cache_;
 };
 
@@ -324,11 +339,12 @@ Eigen::Isometry3d PoseFromProto(const v1::Pose& proto, const std::string& field)
 }
 
 std::shared_ptr<const Scene> SceneFromProto(const v1::Scene& proto, const std::string& base_dir,
-                                            const BlobResolver& resolver) {
+                                            const BlobResolver& resolver,
+                                            const MeshBytesLoader& load_bytes) {
   SceneResolution(proto);
   Scene scene{.name = proto.name(), .space = SpaceFromProto(proto.space(), "scene.space")};
   scene.self_collision = proto.self_collision();
-  ShapeConverter shapes(base_dir, resolver);
+  ShapeConverter shapes(base_dir, resolver, load_bytes);
 
   for (int i = 0; i < proto.obstacles_size(); ++i) {
     const v1::Obstacle& o = proto.obstacles(i);
