@@ -13,4 +13,5 @@ $SUDO apt-get install -y -q --no-install-recommends \
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev \
   libcivetweb-dev libssl-dev zlib1g-dev \
   python3 python3-grpcio python3-protobuf python3-grpc-tools python3-pytest \
-  librsvg2-bin
+  librsvg2-bin \
+  clang libclang-rt-14-dev

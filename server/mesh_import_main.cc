@@ -43,7 +43,8 @@ int main(int argc, char** argv) {
     if (std::strcmp(argv[i], "--memory-mb") == 0) memory_mb = std::strtol(argv[i + 1], nullptr, 10);
     if (std::strcmp(argv[i], "--cpu-s") == 0) cpu_s = std::strtol(argv[i + 1], nullptr, 10);
   }
-  Limit(RLIMIT_AS, static_cast<rlim_t>(memory_mb > 0 ? memory_mb : 1024) << 20);
+  // 0: no address-space limit (sanitizer builds reserve terabytes of it).
+  if (memory_mb != 0) Limit(RLIMIT_AS, static_cast<rlim_t>(memory_mb > 0 ? memory_mb : 1024) << 20);
   Limit(RLIMIT_CPU, static_cast<rlim_t>(cpu_s > 0 ? cpu_s : 20));
   Limit(RLIMIT_CORE, 0);
   Limit(RLIMIT_FSIZE, 0);

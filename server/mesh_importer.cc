@@ -171,7 +171,7 @@ std::shared_ptr<const Mesh> MeshImporter::Import(const std::string& bytes,
   Child child(pid);
   // Limits set from here too, so that they hold whatever the helper does; it sets the same
   // ones itself before it reads a byte.
-  SetLimit(pid, RLIMIT_AS, static_cast<rlim_t>(limits_.memory_mb) << 20);
+  if (limits_.memory_mb > 0) SetLimit(pid, RLIMIT_AS, static_cast<rlim_t>(limits_.memory_mb) << 20);
   SetLimit(pid, RLIMIT_CPU, static_cast<rlim_t>(limits_.cpu_s));
   SetLimit(pid, RLIMIT_CORE, 0);
   SetLimit(pid, RLIMIT_FSIZE, 0);
