@@ -128,7 +128,7 @@ MergeOptions MergeOptionsFromProto(const v1::MergeOptions& proto) {
   }
   options.report_inputs = proto.report_inputs();
   if (proto.has_optimize_ms()) {
-    RequireNonNegative(proto.optimize_ms(), "options.optimize_ms");
+    limits::RequireRange(proto.optimize_ms(), 0, limits::kMaxOptimizeMs, "options.optimize_ms");
     options.optimize_ms = proto.optimize_ms();
   }
   return options;

@@ -222,6 +222,8 @@ CASES = [
     ("endpoint_tolerance_inf", "merge", merge_req(endpoint_tolerance=float("inf")), C.INVALID_ARGUMENT, "options.endpoint_tolerance"),
     ("node_spacing_tiny", "merge", merge_req(max_node_spacing=1e-9), C.INVALID_ARGUMENT, "options.max_node_spacing"),
     ("node_spacing_many_nodes", "merge", merge_req(max_node_spacing=0.0005), C.INVALID_ARGUMENT, "options.max_node_spacing"),
+    ("optimize_ms_1e308", "merge", merge_req(optimize_ms=1e308), C.INVALID_ARGUMENT, "options.optimize_ms"),
+    ("evaluation_unknown", "merge", merge_req(evaluation=9), C.INVALID_ARGUMENT, "options.evaluation"),
     ("progress_interval_negative", "merge", dict(progress_interval_ms=-5), C.INVALID_ARGUMENT, "progress_interval_ms"),
     # Measures.
     ("k_1e9", "merge", dict(measure=merge_pb2.Measure(type=merge_pb2.Measure.TYPE_INVERSE_CLEARANCE, k=1e9)), C.INVALID_ARGUMENT, "measure.k"),
