@@ -14,6 +14,7 @@ packages=(
   libcivetweb-dev libssl-dev zlib1g-dev
   python3 python3-grpcio python3-protobuf python3-grpc-tools python3-pytest python3-pip
   python3-setuptools python3-wheel
+  clang libclang-rt-14-dev
 )
 if [ "${1:-}" != "--build" ]; then
   # Tests: pictures (librsvg), nginx as the gRPC front (tests/deploy/affinity_test.py).

@@ -19,6 +19,7 @@
 #include <string>
 
 #include "core/common/error.h"
+#include "server/mesh_importer.h"
 #include "server/metrics.h"
 #include "server/service.h"
 
@@ -40,6 +41,10 @@ struct Flags {
   double drain_s = 2;
   int progress_interval_ms = 100;
   std::string log_level = "info";
+  std::string mesh_import_helper;
+  int64_t mesh_import_memory_mb = 1024;
+  int mesh_import_cpu_s = 20;
+  double mesh_import_timeout_s = 30;
 };
 
 }  // namespace
@@ -96,6 +101,21 @@ int main(int argc, char** argv) {
                  "default minimum time between two progress events of a merge")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
+  app.add_option("--mesh-import-helper", flags.mesh_import_helper,
+                 "the hgraph-mesh-import executable that parses client meshes (default: beside "
+                 "this binary)");
+  app.add_option("--mesh-import-memory-mb", flags.mesh_import_memory_mb,
+                 "address-space limit of each mesh import process")
+      ->check(CLI::Range(int64_t{64}, int64_t{1} << 20))
+      ->capture_default_str();
+  app.add_option("--mesh-import-cpu-s", flags.mesh_import_cpu_s,
+                 "CPU-time limit of each mesh import process")
+      ->check(CLI::Range(1, 3600))
+      ->capture_default_str();
+  app.add_option("--mesh-import-timeout-s", flags.mesh_import_timeout_s,
+                 "wall-clock limit of each mesh import (the call's deadline, if sooner, wins)")
+      ->check(CLI::Range(0.1, 3600.0))
+      ->capture_default_str();
   app.add_option("--log-level", flags.log_level, "trace, debug, info, warn, error")
       ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
@@ -122,9 +142,17 @@ int main(int argc, char** argv) {
       .cache_bytes = static_cast<size_t>(flags.cache_bytes),
       .max_blob_bytes = flags.max_blob_bytes,
       .session_ttl = std::chrono::milliseconds(static_cast<int64_t>(flags.session_ttl_s * 1e3)),
-      .progress_interval_ms = flags.progress_interval_ms};
+      .progress_interval_ms = flags.progress_interval_ms,
+      .mesh_import = {
+          .helper_path = flags.mesh_import_helper.empty() ? hgraph::server::DefaultMeshImportHelper()
+                                                          : flags.mesh_import_helper,
+          .memory_mb = flags.mesh_import_memory_mb,
+          .cpu_s = flags.mesh_import_cpu_s,
+          .timeout = std::chrono::milliseconds(
+              static_cast<int64_t>(flags.mesh_import_timeout_s * 1e3))}};
 
   try {
+    hgraph::server::MeshImporter(options.mesh_import).CheckHelper();
     hgraph::server::Metrics metrics;
     hgraph::server::PathMergerService service(options, metrics);
 

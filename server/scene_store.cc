@@ -65,7 +65,8 @@ void ValidateDigest(const v1::Digest& digest, const std::string& field) {
   }
 }
 
-SceneStore::SceneStore(ResourceCache& cache, Metrics& metrics) : cache_(cache), metrics_(metrics) {}
+SceneStore::SceneStore(ResourceCache& cache, Metrics& metrics, MeshImporter importer)
+    : cache_(cache), metrics_(metrics), importer_(std::move(importer)) {}
 
 bool SceneStore::HasBlob(const v1::Digest& digest) const {
   auto blob = cache_.Get<const std::string>(CacheKind::kBlob, digest.sha256());
@@ -94,7 +95,7 @@ bool SceneStore::PutBlob(const v1::Digest& declared, std::string bytes) {
   return true;
 }
 
-v1::Digest SceneStore::PutScene(const v1::Scene& scene) {
+v1::Digest SceneStore::PutScene(const v1::Scene& scene, const CancelToken& token) {
   for (int i = 0; i < scene.obstacles_size(); ++i) {
     CheckMesh(scene.obstacles(i).shape(), "scene.obstacles[" + std::to_string(i) + "].shape",
               *this);
@@ -115,7 +116,7 @@ v1::Digest SceneStore::PutScene(const v1::Scene& scene) {
     }
   }
   try {
-    Get(digest, "scene");
+    Get(digest, "scene", token);
   } catch (...) {
     // A scene that does not load must not be found by a later CreateSession.
     cache_.Erase(CacheKind::kScene, digest.sha256());
@@ -128,7 +129,8 @@ bool SceneStore::HasScene(const v1::Digest& digest) const {
   return cache_.Contains(CacheKind::kScene, digest.sha256());
 }
 
-LoadedScene SceneStore::Get(const v1::Digest& digest, const std::string& field) {
+LoadedScene SceneStore::Get(const v1::Digest& digest, const std::string& field,
+                            const CancelToken& token) {
   ValidateDigest(digest, field);
   const std::string& sha = digest.sha256();
   std::shared_future<LoadedScene> pending;
@@ -155,7 +157,7 @@ LoadedScene SceneStore::Get(const v1::Digest& digest, const std::string& field) 
   }
   metrics_.Increment("hgraph_scene_cache_misses_total", {});
   try {
-    LoadedScene loaded = Load(sha, field);
+    LoadedScene loaded = Load(sha, field, token);
     promise.set_value(loaded);
     std::lock_guard lock(loading_mutex_);
     loading_.erase(sha);
@@ -168,7 +170,8 @@ LoadedScene SceneStore::Get(const v1::Digest& digest, const std::string& field) 
   }
 }
 
-LoadedScene SceneStore::Load(const std::string& sha, const std::string& field) {
+LoadedScene SceneStore::Load(const std::string& sha, const std::string& field,
+                             const CancelToken& token) {
   auto proto = cache_.Get<const v1::Scene>(CacheKind::kScene, sha);
   if (!proto) {
     throw Error(ErrorCode::kNotFound, field,
@@ -183,7 +186,13 @@ LoadedScene SceneStore::Load(const std::string& sha, const std::string& field) {
   };
   std::shared_ptr<const Scene> scene;
   try {
-    scene = SceneFromProto(*proto, "", resolver);
+    // Client bytes are parsed only out of process.
+    const MeshBytesLoader load_bytes = [&](const std::string& bytes, const std::string& format,
+                                           const MeshLoadOptions& options,
+                                           const std::string& mesh_field) {
+      return importer_.Import(bytes, format, options, mesh_field, token);
+    };
+    scene = SceneFromProto(*proto, "", resolver, load_bytes);
   } catch (const Error& e) {
     // A blob evicted since PutScene: the client uploads it again.
     if (e.code() == ErrorCode::kNotFound) throw Error(ErrorCode::kNotFound, field, e.what());

@@ -11,6 +11,8 @@
 
 #include "core/collision/collision_world.h"
 #include "hgraph/v1/scene.pb.h"
+#include "core/common/progress.h"
+#include "server/mesh_importer.h"
 #include "server/metrics.h"
 #include "server/resource_cache.h"
 
@@ -25,7 +27,8 @@ struct LoadedScene {
 // Thread safe. Not copyable.
 class SceneStore {
  public:
-  SceneStore(ResourceCache& cache, Metrics& metrics);
+  // Mesh bytes are parsed by `importer`, in a child process per mesh.
+  SceneStore(ResourceCache& cache, Metrics& metrics, MeshImporter importer);
   SceneStore(const SceneStore&) = delete;
   SceneStore& operator=(const SceneStore&) = delete;
 
@@ -38,19 +41,22 @@ class SceneStore {
   // Checks that every mesh is inline or an uploaded blob, stores the scene under the digest of
   // its canonical serialization, and loads it (so that errors in it are reported now, naming
   // the field). Returns the digest.
-  v1::Digest PutScene(const v1::Scene& scene);
+  // `token` bounds the mesh imports (deadline, cancellation).
+  v1::Digest PutScene(const v1::Scene& scene, const CancelToken& token = CancelToken());
 
   // The scene and its collision world, built on first use and shared by every session that
   // names the same digest; concurrent first uses wait for one load. Throws Error(kNotFound,
   // field) if the scene (or a blob it needs) is not held.
-  LoadedScene Get(const v1::Digest& digest, const std::string& field);
+  LoadedScene Get(const v1::Digest& digest, const std::string& field,
+                  const CancelToken& token = CancelToken());
   bool HasScene(const v1::Digest& digest) const;
 
  private:
-  LoadedScene Load(const std::string& sha, const std::string& field);
+  LoadedScene Load(const std::string& sha, const std::string& field, const CancelToken& token);
 
   ResourceCache& cache_;
   Metrics& metrics_;
+  MeshImporter importer_;
   std::mutex loading_mutex_;
   std::map<std::string, std::shared_future<LoadedScene>> loading_;
 };

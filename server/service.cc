@@ -13,6 +13,7 @@
 #include "core/adapter/path_io.h"
 #include "core/adapter/scene_proto.h"
 #include "core/common/error.h"
+#include "core/common/limits.h"
 #include "core/merge/merge.h"
 #include "core/merge/path_check.h"
 #include "core/motion/local_planner.h"
@@ -76,6 +77,8 @@ grpc::Status Invoke(const std::function<void()>& body, const CancelToken& token)
   } catch (const std::bad_alloc&) {
     return grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED, "out of memory");
   } catch (const std::exception& e) {
+    // A broken invariant (InternalError) fails this call only; it is a bug worth a log line.
+    spdlog::error("internal error: {}", e.what());
     return grpc::Status(grpc::StatusCode::INTERNAL, e.what());
   }
 }
@@ -245,6 +248,16 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
             const v1::MergePathsRequest* request)
       : service_(service), request_(request) {
     WireDeadline(context, token_);
+    if (request->progress_interval_ms() < 0 ||
+        request->progress_interval_ms() > limits::kMaxProgressIntervalMs) {
+      Complete(grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
+                            "progress_interval_ms: must be in [0, " +
+                                std::to_string(limits::kMaxProgressIntervalMs) + "] (0 = the "
+                                "server's default), got " +
+                                std::to_string(request->progress_interval_ms())),
+               false);
+      return;
+    }
     const int interval = request->progress_interval_ms() > 0
                              ? request->progress_interval_ms()
                              : service->options().progress_interval_ms;
@@ -283,7 +296,7 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
     const v1::Session session = service_->sessions_.Touch(request.session(), "session");
     CheckBatchLimits(request.paths(), service_->options());
     if (request.paths().paths_size() == 0) throw InputError("paths.paths", "must not be empty");
-    LoadedScene scene = service_->scenes_.Get(session.scene(), "session");
+    LoadedScene scene = service_->scenes_.Get(session.scene(), "session", token_);
     token_.ThrowIfStopped();
 
     MergeRequest merge{.paths = PathsFromProto(request.paths()),
@@ -398,7 +411,7 @@ PathMergerService::PathMergerService(const ServerOptions& options, Metrics& metr
     : options_(options),
       metrics_(metrics),
       cache_(options.cache_bytes),
-      scenes_(cache_, metrics),
+      scenes_(cache_, metrics, MeshImporter(options.mesh_import)),
       sessions_(options.max_sessions, options.session_ttl),
       pool_(options.threads, options.max_admitted) {
   metrics_.DeclareCounter("grpc_server_started_total", "RPCs started on the server.");
@@ -535,9 +548,9 @@ grpc::ServerUnaryReactor* PathMergerService::PutScene(grpc::CallbackServerContex
                                                       v1::PutSceneResponse* response) {
   auto* call = new UnaryCall(this, context, "PutScene", "");
   call->Run(
-      [=, this](const CancelToken&) {
+      [=, this](const CancelToken& token) {
         if (!request->has_scene()) throw InputError("scene", "must be set");
-        *response->mutable_digest() = scenes_.PutScene(request->scene());
+        *response->mutable_digest() = scenes_.PutScene(request->scene(), token);
       },
       /*on_worker=*/true);
   return call;
@@ -551,10 +564,10 @@ grpc::ServerUnaryReactor* PathMergerService::CreateSession(grpc::CallbackServerC
       this, context, "CreateSession",
       request->session_id().empty() ? "" : "sessions/" + request->session_id().substr(0, 32));
   call->Run(
-      [=, this](const CancelToken&) {
+      [=, this](const CancelToken& token) {
         if (!request->has_scene()) throw InputError("scene", "must be set");
         // Loads the scene now (or finds it loaded), so that a missing scene is reported here.
-        scenes_.Get(request->scene(), "scene");
+        scenes_.Get(request->scene(), "scene", token);
         *response = sessions_.Create(request->scene(), request->session_id());
       },
       /*on_worker=*/true);
@@ -631,8 +644,13 @@ grpc::ServerUnaryReactor* PathMergerService::CheckPaths(grpc::CallbackServerCont
       [=, this](const CancelToken& token) {
         const v1::Session session = sessions_.Touch(request->session(), "session");
         CheckBatchLimits(request->paths(), options_);
-        LoadedScene scene = scenes_.Get(session.scene(), "session");
+        LoadedScene scene = scenes_.Get(session.scene(), "session", token);
         token.ThrowIfStopped();
+        if (request->has_resolution()) {
+          limits::RequireRange(request->resolution(), limits::kMinResolution,
+                               limits::kMaxResolution, "resolution");
+        }
+        if (request->has_k()) limits::RequireRange(request->k(), 0, limits::kMaxK, "k");
         const double resolution =
             request->has_resolution() ? request->resolution() : SceneResolution(*scene.proto);
         const LocalPlanner planner(scene.world, LocalPlannerOptions{.resolution = resolution});
@@ -696,12 +714,20 @@ class PathMergerService::PlanCall final : public grpc::ServerWriteReactor<v1::Pl
   void Plan() {
     const v1::PlanPathsRequest& request = *request_;
     const v1::Session session = service_->sessions_.Touch(request.session(), "session");
+    if (request.count() < 0) {
+      throw InputError("count", "must be >= 0 (0 = one path), got " +
+                                    std::to_string(request.count()));
+    }
+    if (request.time_per_path_s() != 0) {
+      limits::RequirePositiveUpTo(request.time_per_path_s(), limits::kMaxPlanSeconds,
+                                  "time_per_path_s");
+    }
     if (request.count() > service_->options().max_paths) {
       throw Error(ErrorCode::kResourceExhausted, "count",
                   std::to_string(request.count()) + " paths exceed the limit of " +
                       std::to_string(service_->options().max_paths) + " (--max-paths)");
     }
-    LoadedScene scene = service_->scenes_.Get(session.scene(), "session");
+    LoadedScene scene = service_->scenes_.Get(session.scene(), "session", token_);
     const Scene& model = scene.world->scene();
     PlanRequest plan{.planner = request.planner().empty()
                                     ? PlannerType::kRRTConnect

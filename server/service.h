@@ -10,6 +10,7 @@
 #include <string>
 
 #include "hgraph/v1/service.grpc.pb.h"
+#include "server/mesh_importer.h"
 #include "server/metrics.h"
 #include "server/resource_cache.h"
 #include "server/scene_store.h"
@@ -29,6 +30,7 @@ struct ServerOptions {
   int64_t max_blob_bytes = int64_t{256} << 20;
   std::chrono::milliseconds session_ttl{std::chrono::hours(1)};
   int progress_interval_ms = 100;
+  MeshImportLimits mesh_import;  // how client mesh bytes are parsed (out of process)
 };
 
 // Thread safe. Not copyable or movable (reactors point into it).

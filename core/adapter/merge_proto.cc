@@ -7,25 +7,9 @@
 #include "core/adapter/path_io.h"
 #include "core/adapter/scene_proto.h"
 #include "core/common/error.h"
+#include "core/common/limits.h"
 
 namespace hgraph {
-namespace {
-
-std::string Num(double v) {
-  std::ostringstream out;
-  out << v;
-  return out.str();
-}
-
-void RequireNonNegative(double v, const std::string& field) {
-  if (!std::isfinite(v) || v < 0) throw InputError(field, "must be finite and >= 0, got " + Num(v));
-}
-
-void RequirePositive(double v, const std::string& field) {
-  if (!std::isfinite(v) || v <= 0) throw InputError(field, "must be finite and > 0, got " + Num(v));
-}
-
-}  // namespace
 
 MeasureSpec MeasureFromProto(const v1::Measure& proto) {
   MeasureSpec spec;
@@ -42,10 +26,10 @@ MeasureSpec MeasureFromProto(const v1::Measure& proto) {
                        "unknown measure type " + std::to_string(static_cast<int>(proto.type())));
   }
   if (proto.has_k()) {
-    RequireNonNegative(proto.k(), "measure.k");
+    limits::RequireRange(proto.k(), 0, limits::kMaxK, "measure.k");
     spec.k = proto.k();
   }
-  RequireNonNegative(proto.safety(), "measure.safety");
+  limits::RequireRange(proto.safety(), 0, limits::kMaxDistance, "measure.safety");
   spec.safety = proto.safety();
   return spec;
 }
@@ -96,35 +80,42 @@ MergeOptions MergeOptionsFromProto(const v1::MergeOptions& proto) {
   // Core code reads a non-positive radius and negative gaps as "automatic", so an explicit bad
   // value must be caught here rather than silently replaced.
   if (proto.has_radius()) {
-    RequirePositive(proto.radius(), "options.radius");
+    limits::RequirePositiveUpTo(proto.radius(), limits::kMaxDistance, "options.radius");
     options.candidates.radius = proto.radius();
   }
   if (proto.has_phi()) {
-    if (proto.phi() < 1) {
-      throw InputError("options.phi", "must be >= 1, got " + std::to_string(proto.phi()));
+    if (proto.phi() < 1 || proto.phi() > limits::kMaxPhi) {
+      throw InputError("options.phi", "must be in [1, " + std::to_string(limits::kMaxPhi) +
+                                          "], got " + std::to_string(proto.phi()));
     }
     options.candidates.phi = proto.phi();
   }
   if (proto.has_gap_init()) {
-    RequireNonNegative(proto.gap_init(), "options.gap_init");
+    limits::RequireRange(proto.gap_init(), 0, limits::kMaxGapCost, "options.gap_init");
     options.candidates.gap_init = proto.gap_init();
   }
   if (proto.has_gap_extend()) {
-    RequireNonNegative(proto.gap_extend(), "options.gap_extend");
+    limits::RequireRange(proto.gap_extend(), 0, limits::kMaxGapCost, "options.gap_extend");
     options.candidates.gap_extend = proto.gap_extend();
   }
-  if (proto.has_resolution()) RequirePositive(proto.resolution(), "options.resolution");
-  if (proto.threads() < 0) {
-    throw InputError("options.threads",
-                     "must be >= 0 (0 = all cores), got " + std::to_string(proto.threads()));
+  if (proto.has_resolution()) {
+    limits::RequireRange(proto.resolution(), limits::kMinResolution, limits::kMaxResolution,
+                         "options.resolution");
+  }
+  if (proto.threads() < 0 || proto.threads() > limits::kMaxThreads) {
+    throw InputError("options.threads", "must be in [0, " + std::to_string(limits::kMaxThreads) +
+                                            "] (0 = all cores), got " +
+                                            std::to_string(proto.threads()));
   }
   options.threads = proto.threads();
   if (proto.has_endpoint_tolerance()) {
-    RequireNonNegative(proto.endpoint_tolerance(), "options.endpoint_tolerance");
+    limits::RequireRange(proto.endpoint_tolerance(), 0, limits::kMaxDistance,
+                         "options.endpoint_tolerance");
     options.endpoint_tolerance = proto.endpoint_tolerance();
   }
   if (proto.has_max_node_spacing()) {
-    RequireNonNegative(proto.max_node_spacing(), "options.max_node_spacing");
+    limits::RequireRange(proto.max_node_spacing(), 0, limits::kMaxDistance,
+                         "options.max_node_spacing");
     options.max_node_spacing = proto.max_node_spacing();
   }
   switch (proto.evaluation()) {
@@ -137,7 +128,7 @@ MergeOptions MergeOptionsFromProto(const v1::MergeOptions& proto) {
   }
   options.report_inputs = proto.report_inputs();
   if (proto.has_optimize_ms()) {
-    RequireNonNegative(proto.optimize_ms(), "options.optimize_ms");
+    limits::RequireRange(proto.optimize_ms(), 0, limits::kMaxOptimizeMs, "options.optimize_ms");
     options.optimize_ms = proto.optimize_ms();
   }
   return options;
@@ -145,7 +136,8 @@ MergeOptions MergeOptionsFromProto(const v1::MergeOptions& proto) {
 
 double ResolutionFromProto(const v1::MergeOptions& options, const v1::Scene& scene) {
   if (options.has_resolution()) {
-    RequirePositive(options.resolution(), "options.resolution");
+    limits::RequireRange(options.resolution(), limits::kMinResolution, limits::kMaxResolution,
+                         "options.resolution");
     return options.resolution();
   }
   return SceneResolution(scene);

@@ -1,5 +1,6 @@
 #include "core/adapter/scene_proto.h"
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <filesystem>
@@ -10,6 +11,7 @@
 #include "core/adapter/json_io.h"
 #include "core/adapter/ompl_cfg.h"
 #include "core/common/error.h"
+#include "core/common/limits.h"
 #include "core/scene/mesh_loader.h"
 
 namespace hgraph {
@@ -56,8 +58,9 @@ void RequireFinite(double v, const std::string& field) {
   if (!std::isfinite(v)) throw InputError(field, "must be finite, got " + Num(v));
 }
 
+// Sizes and positions stay within the coordinate range so that extents and distances are finite.
 void RequirePositive(double v, const std::string& field) {
-  if (!std::isfinite(v) || v <= 0) throw InputError(field, "must be finite and > 0, got " + Num(v));
+  limits::RequirePositiveUpTo(v, limits::kMaxCoordinate, field);
 }
 
 ComponentType ComponentTypeFromProto(v1::Component::Type type, const std::string& field) {
@@ -102,8 +105,9 @@ std::string NormalizeFormat(const std::string& format) {
 // many obstacles, and assimp parsing dominates the load time.
 class ShapeConverter {
  public:
-  ShapeConverter(std::string base_dir, const BlobResolver& resolver)
-      : base_dir_(std::move(base_dir)), resolver_(resolver) {}
+  ShapeConverter(std::string base_dir, const BlobResolver& resolver,
+                 const MeshBytesLoader& load_bytes)
+      : base_dir_(std::move(base_dir)), resolver_(resolver), load_bytes_(load_bytes) {}
 
   Shape Convert(const v1::Shape& proto, const std::string& field) {
     const Eigen::Vector3d scale = Scale(proto, field + ".scale");
@@ -118,18 +122,18 @@ class ShapeConverter {
         for (int k = 0; k < 3; ++k) RequirePositive(proto.box().size(k), Index(f, k));
         shape.type = ShapeType::kBox;
         shape.box_size = Vector(proto.box().size()).cwiseProduct(scale);
+        RequireScaledSize(shape.box_size.maxCoeff(), field);
         break;
       }
       case v1::Shape::kSphere: {
         const double r = proto.sphere().radius();
-        if (!std::isfinite(r) || r < 0) {
-          throw InputError(field + ".sphere.radius", "must be finite and >= 0, got " + Num(r));
-        }
+        limits::RequireRange(r, 0, limits::kMaxCoordinate, field + ".sphere.radius");
         if (scale.x() != scale.y() || scale.x() != scale.z()) {
           throw InputError(field + ".scale", "a sphere needs a uniform scale");
         }
         shape.type = ShapeType::kSphere;
         shape.radius = r * scale.x();
+        RequireScaledSize(shape.radius, field);
         break;
       }
       case v1::Shape::kCylinder: {
@@ -141,6 +145,7 @@ class ShapeConverter {
         shape.type = ShapeType::kCylinder;
         shape.radius = proto.cylinder().radius() * scale.x();
         shape.length = proto.cylinder().length() * scale.z();
+        RequireScaledSize(std::max(shape.radius, shape.length), field);
         break;
       }
       case v1::Shape::kMesh:
@@ -155,7 +160,9 @@ class ShapeConverter {
 
  private:
   static Eigen::Vector3d Scale(const v1::Shape& proto, const std::string& field) {
-    for (int k = 0; k < proto.scale_size(); ++k) RequirePositive(proto.scale(k), Index(field, k));
+    for (int k = 0; k < proto.scale_size(); ++k) {
+      limits::RequireRange(proto.scale(k), limits::kMinScale, limits::kMaxWeight, Index(field, k));
+    }
     switch (proto.scale_size()) {
       case 0: return Eigen::Vector3d::Ones();
       case 1: return Eigen::Vector3d::Constant(proto.scale(0));
@@ -163,6 +170,24 @@ class ShapeConverter {
       default:
         throw InputError(field, "expected 1 value (uniform) or 3 (x y z), got " +
                                     std::to_string(proto.scale_size()));
+    }
+  }
+
+  static void RequireScaledSize(double size, const std::string& field) {
+    if (!(size <= limits::kMaxCoordinate)) {
+      throw InputError(field, "scaled size " + Num(size) + " exceeds " +
+                                  Num(limits::kMaxCoordinate));
+    }
+  }
+
+  // Mesh vertices, after scaling, lie within the coordinate range.
+  static void RequireMeshInRange(const Mesh& mesh, const std::string& field) {
+    for (const Eigen::Vector3d& v : mesh.vertices) {
+      if (!(v.cwiseAbs().maxCoeff() <= limits::kMaxCoordinate)) {
+        throw InputError(field, "a scaled mesh vertex lies outside [-" +
+                                    Num(limits::kMaxCoordinate) + ", " +
+                                    Num(limits::kMaxCoordinate) + "]");
+      }
     }
   }
 
@@ -181,7 +206,10 @@ class ShapeConverter {
         const std::string resolved = file.lexically_normal().string();
         shape->source = resolved;
         auto& cached = cache_["file:" + resolved + scale_key];
-        if (!cached) cached = LoadMeshFile(resolved, options, f);
+        if (!cached) {
+          cached = LoadMeshFile(resolved, options, f);
+          RequireMeshInRange(*cached, f);
+        }
         shape->mesh = cached;
         return;
       }
@@ -190,7 +218,7 @@ class ShapeConverter {
         if (mesh.data().empty()) throw InputError(field + ".data", "empty mesh data");
         shape->source =
             "inline " + format + " data (" + std::to_string(mesh.data().size()) + " bytes)";
-        shape->mesh = LoadMeshBytes(mesh.data(), format, options, field + ".data");
+        shape->mesh = LoadBytes(mesh.data(), format, options, field + ".data");
         return;
       }
       case v1::MeshRef::kDigest: {
@@ -210,7 +238,7 @@ class ShapeConverter {
             throw Error(ErrorCode::kNotFound, f,
                         "blob sha256:" + mesh.digest().sha256() + " has not been uploaded");
           }
-          cached = LoadMeshBytes(*bytes, format, options, f);
+          cached = LoadBytes(*bytes, format, options, f);
         }
         shape->mesh = cached;
         return;
@@ -220,6 +248,14 @@ class ShapeConverter {
     }
   }
 
+  std::shared_ptr<const Mesh> LoadBytes(const std::string& bytes, const std::string& format,
+                                        const MeshLoadOptions& options, const std::string& field) {
+    std::shared_ptr<const Mesh> loaded = load_bytes_ ? load_bytes_(bytes, format, options, field)
+                                                     : LoadMeshBytes(bytes, format, options, field);
+    RequireMeshInRange(*loaded, field);
+    return loaded;
+  }
+
   static std::string RequireFormat(const v1::MeshRef& mesh, const std::string& field,
                                    const std::string& what) {
     const std::string format = NormalizeFormat(mesh.format());
@@ -227,11 +263,18 @@ class ShapeConverter {
       throw InputError(field + ".format",
                        "required for " + what + " (a file extension such as \"obj\")");
     }
+    if (format.size() > 16 ||
+        !std::all_of(format.begin(), format.end(),
+                     [](char c) { return std::isalnum(static_cast<unsigned char>(c)) != 0; })) {
+      throw InputError(field + ".format",
+                       "must be a file extension of 1 to 16 letters and digits (such as \"obj\")");
+    }
     return format;
   }
 
   std::string base_dir_;
   const BlobResolver& resolver_;
+  const MeshBytesLoader& load_bytes_;
   std::map<std::string, std::shared_ptr<const Mesh>> cache_;
 };
 
@@ -304,7 +347,10 @@ Eigen::Isometry3d PoseFromProto(const v1::Pose& proto, const std::string& field)
     throw InputError(fo, "expected 4 values (quaternion x y z w), got " +
                              std::to_string(proto.orientation_size()));
   }
-  for (int k = 0; k < proto.position_size(); ++k) RequireFinite(proto.position(k), Index(fp, k));
+  for (int k = 0; k < proto.position_size(); ++k) {
+    limits::RequireRange(proto.position(k), -limits::kMaxCoordinate, limits::kMaxCoordinate,
+                         Index(fp, k));
+  }
   for (int k = 0; k < proto.orientation_size(); ++k) {
     RequireFinite(proto.orientation(k), Index(fo, k));
   }
@@ -324,11 +370,12 @@ Eigen::Isometry3d PoseFromProto(const v1::Pose& proto, const std::string& field)
 }
 
 std::shared_ptr<const Scene> SceneFromProto(const v1::Scene& proto, const std::string& base_dir,
-                                            const BlobResolver& resolver) {
+                                            const BlobResolver& resolver,
+                                            const MeshBytesLoader& load_bytes) {
   SceneResolution(proto);
   Scene scene{.name = proto.name(), .space = SpaceFromProto(proto.space(), "scene.space")};
   scene.self_collision = proto.self_collision();
-  ShapeConverter shapes(base_dir, resolver);
+  ShapeConverter shapes(base_dir, resolver, load_bytes);
 
   for (int i = 0; i < proto.obstacles_size(); ++i) {
     const v1::Obstacle& o = proto.obstacles(i);
@@ -391,9 +438,10 @@ std::shared_ptr<const Scene> LoadSceneFile(const std::string& path) {
 
 double SceneResolution(const v1::Scene& proto) {
   const double r = proto.resolution();
-  if (!std::isfinite(r) || r < 0) {
-    throw InputError("scene.resolution", "must be finite and >= 0 (0 = the default " +
-                                             Num(kDefaultResolution) + "), got " + Num(r));
+  if (r != 0 && !(r >= limits::kMinResolution && r <= limits::kMaxResolution)) {
+    throw InputError("scene.resolution", "must be 0 (the default " + Num(kDefaultResolution) +
+                                             ") or in [" + Num(limits::kMinResolution) + ", " +
+                                             Num(limits::kMaxResolution) + "], got " + Num(r));
   }
   return r > 0 ? r : kDefaultResolution;
 }

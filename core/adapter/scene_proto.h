@@ -8,6 +8,7 @@
 #include <optional>
 #include <string>
 
+#include "core/scene/mesh_loader.h"
 #include "core/scene/scene.h"
 #include "core/space/space.h"
 #include "hgraph/v1/scene.pb.h"
@@ -19,6 +20,13 @@ namespace hgraph {
 // (the service answers NOT_FOUND and the client re-uploads). Must be thread safe if the caller
 // converts scenes from several threads.
 using BlobResolver = std::function<std::optional<std::string>(const v1::Digest&)>;
+
+// Parses mesh bytes (inline data or a blob) for SceneFromProto. The default parses them in this
+// process (LoadMeshBytes); a server parses them in a child process (server/mesh_importer.h).
+// Must throw InputError naming `field` for bad bytes.
+using MeshBytesLoader = std::function<std::shared_ptr<const Mesh>(
+    const std::string& bytes, const std::string& format, const MeshLoadOptions& options,
+    const std::string& field)>;
 
 // `field` prefixes every error ("scene.space").
 Space SpaceFromProto(const v1::Space& proto, const std::string& field);
@@ -35,9 +43,11 @@ Eigen::Isometry3d PoseFromProto(const v1::Pose& proto, const std::string& field)
 
 // Builds and validates a scene. Mesh paths are relative to base_dir unless absolute (an empty
 // base_dir means the working directory). Digest meshes are looked up with `resolver`; an empty
-// resolver rejects them. Start and goal are validated against the space and normalised.
+// resolver rejects them. Start and goal are validated against the space and normalised. Mesh
+// bytes go through `load_bytes` (empty: in process).
 std::shared_ptr<const Scene> SceneFromProto(const v1::Scene& proto, const std::string& base_dir,
-                                            const BlobResolver& resolver);
+                                            const BlobResolver& resolver,
+                                            const MeshBytesLoader& load_bytes = {});
 
 // Reads a proto3 JSON scene file (snake_case names; unknown fields rejected, naming the file),
 // or an OMPL.app problem if the name ends in .cfg (see ompl_cfg.h).

@@ -1,6 +1,8 @@
 // Error types shared by the engine. Bad user input is reported by throwing InputError, whose
 // message names the field and the problem; callers (CLI, service) map it to an exit code or to
-// INVALID_ARGUMENT. Bugs in our own code are caught by HGRAPH_CHECK, which aborts.
+// INVALID_ARGUMENT. Bugs in our own code are caught by HGRAPH_CHECK, which throws InternalError:
+// the values an invariant guards may derive from a request, and a service must fail that call
+// (INTERNAL, logged), never the process.
 #pragma once
 
 #include <cstdio>
@@ -45,13 +47,21 @@ class InputError : public Error {
       : Error(ErrorCode::kInvalidArgument, std::move(field), message) {}
 };
 
+// A broken internal invariant: a bug in hgraph, or a request-derived value that validation
+// should have refused. Not an Error: callers report it as an internal failure. Copyable.
+class InternalError : public std::logic_error {
+ public:
+  using std::logic_error::logic_error;
+};
+
 [[noreturn]] inline void CheckFailed(const char* condition, const char* file, int line) {
-  std::fprintf(stderr, "hgraph: internal invariant failed: %s at %s:%d\n", condition, file, line);
-  std::abort();
+  throw InternalError(std::string("internal invariant failed: ") + condition + " at " + file +
+                      ":" + std::to_string(line));
 }
 
 }  // namespace hgraph
 
-// Always-on invariant check for conditions that only a bug in hgraph can break.
+// Always-on invariant check for conditions that only a bug in hgraph can break; throws
+// InternalError.
 #define HGRAPH_CHECK(condition) \
   ((condition) ? (void)0 : ::hgraph::CheckFailed(#condition, __FILE__, __LINE__))

@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "core/common/error.h"
+#include "core/common/limits.h"
 
 namespace hgraph {
 
@@ -116,6 +117,12 @@ void HGraph::AppendPath(const Space& space, int p, double max_node_spacing) {
                       "%g would cut edge %zu of path '%.60s' (length %g) into more than %d parts",
                       max_node_spacing, j, paths_[p].name.c_str(), length, kMaxPartsPerEdge);
         throw InputError("options.max_node_spacing", text);
+      }
+      if (num_nodes() + parts > limits::kMaxNodes) {
+        throw InputError("options.max_node_spacing",
+                         limits::Num(max_node_spacing) + " would give the H-Graph more than " +
+                             std::to_string(limits::kMaxNodes) +
+                             " nodes; use a larger spacing (or 0 = no subdivision)");
       }
       for (int k = 1; k < static_cast<int>(parts); ++k) {
         const double t = k / parts;

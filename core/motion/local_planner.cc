@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/common/error.h"
+#include "core/common/limits.h"
 
 namespace hgraph {
 namespace {
@@ -137,10 +138,17 @@ LocalPlanner::~LocalPlanner() = default;
 const Space& LocalPlanner::space() const { return world_->space(); }
 
 int LocalPlanner::SampleCount(double length) const {
-  HGRAPH_CHECK(std::isfinite(length) && length >= 0);
+  // Lengths and the resolution derive from the request: refuse, rather than assert, an edge
+  // that would need too many samples.
   const double step = options_.resolution * space().MaxExtent();
   const double segments = step > 0 ? std::ceil(length / step) : 1.0;
-  HGRAPH_CHECK(segments < 1e9);
+  if (!std::isfinite(length) || length < 0 || !(segments <= limits::kMaxSamplesPerEdge)) {
+    throw InputError("resolution", "an edge of length " + limits::Num(length) + " needs " +
+                                       limits::Num(segments) + " collision samples at resolution " +
+                                       limits::Num(options_.resolution) + ", more than " +
+                                       limits::Num(limits::kMaxSamplesPerEdge) +
+                                       "; raise the resolution or shorten the edge");
+  }
   return std::max(1, static_cast<int>(segments)) + 1;
 }
 

@@ -5,12 +5,18 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
+#include <cctype>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <limits>
+#include <map>
 #include <system_error>
 
 #include "core/common/error.h"
+#include "core/scene/memory_io.h"
+#include "core/scene/mesh_prescan.h"
 
 namespace hgraph {
 namespace {
@@ -34,7 +40,29 @@ void ConfigureImporter(Assimp::Importer& importer) {
   importer.SetPropertyBool(AI_CONFIG_IMPORT_COLLADA_IGNORE_UP_DIRECTION, true);
 }
 
-void CheckScale(const MeshLoadOptions& options, const std::string& field) {
+// Counts what AppendNode would copy, stopping as soon as a limit is passed: node instancing lets
+// a small file name one large mesh many times.
+bool WithinLimits(const aiScene& scene, const aiNode& node, int depth, const MeshLoadOptions& limits,
+                  int64_t& vertices, int64_t& triangles) {
+  if (depth > 1000) return false;
+  for (unsigned i = 0; i < node.mNumMeshes; ++i) {
+    if (node.mMeshes[i] >= scene.mNumMeshes) return false;
+    const aiMesh& mesh = *scene.mMeshes[node.mMeshes[i]];
+    vertices += mesh.mNumVertices;
+    triangles += mesh.mNumFaces;
+    if (vertices > limits.max_vertices || triangles > limits.max_triangles) return false;
+  }
+  for (unsigned c = 0; c < node.mNumChildren; ++c) {
+    if (!WithinLimits(scene, *node.mChildren[c], depth + 1, limits, vertices, triangles)) {
+      return false;
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
+void CheckMeshScale(const MeshLoadOptions& options, const std::string& field) {
   for (int k = 0; k < 3; ++k) {
     if (!std::isfinite(options.scale[k]) || options.scale[k] <= 0) {
       throw InputError(field, "mesh scale[" + std::to_string(k) +
@@ -43,6 +71,8 @@ void CheckScale(const MeshLoadOptions& options, const std::string& field) {
     }
   }
 }
+
+namespace {
 
 void AppendMesh(const aiMesh& in, const aiMatrix4x4& transform, const Eigen::Vector3d& scale,
                 Mesh& out) {
@@ -54,6 +84,10 @@ void AppendMesh(const aiMesh& in, const aiMatrix4x4& transform, const Eigen::Vec
   for (unsigned f = 0; f < in.mNumFaces; ++f) {
     const aiFace& face = in.mFaces[f];
     if (face.mNumIndices != 3) continue;
+    if (face.mIndices[0] >= in.mNumVertices || face.mIndices[1] >= in.mNumVertices ||
+        face.mIndices[2] >= in.mNumVertices) {
+      throw InputError("", "a face names a vertex the mesh does not have");
+    }
     out.triangles.emplace_back(static_cast<int>(base + face.mIndices[0]),
                                static_cast<int>(base + face.mIndices[1]),
                                static_cast<int>(base + face.mIndices[2]));
@@ -77,7 +111,27 @@ std::shared_ptr<const Mesh> Convert(const aiScene* scene, const Assimp::Importer
   if (scene == nullptr) {
     throw InputError(field, "cannot parse mesh " + what + ": " + importer.GetErrorString());
   }
+  int64_t vertices = 0;
+  int64_t triangles = 0;
+  bool within = true;
+  if (options.apply_node_transforms && scene->mRootNode != nullptr) {
+    within = WithinLimits(*scene, *scene->mRootNode, 0, options, vertices, triangles);
+  } else {
+    for (unsigned i = 0; i < scene->mNumMeshes && within; ++i) {
+      vertices += scene->mMeshes[i]->mNumVertices;
+      triangles += scene->mMeshes[i]->mNumFaces;
+      within = vertices <= options.max_vertices && triangles <= options.max_triangles;
+    }
+  }
+  if (!within) {
+    throw InputError(field, "mesh " + what + " is too large or malformed: more than " +
+                                std::to_string(options.max_vertices) + " vertices or " +
+                                std::to_string(options.max_triangles) +
+                                " triangles after instancing, or a broken node tree");
+  }
   auto mesh = std::make_shared<Mesh>();
+  mesh->vertices.reserve(static_cast<size_t>(vertices));
+  mesh->triangles.reserve(static_cast<size_t>(triangles));
   if (options.apply_node_transforms && scene->mRootNode != nullptr) {
     AppendNode(*scene, *scene->mRootNode, aiMatrix4x4(), options.scale, *mesh);
   } else {
@@ -95,11 +149,28 @@ std::shared_ptr<const Mesh> Convert(const aiScene* scene, const Assimp::Importer
   return mesh;
 }
 
+// Imports `bytes` as the file `name` through a MemoryIOSystem that serves nothing else.
+std::shared_ptr<const Mesh> Import(const std::string& bytes, const std::string& name,
+                                   const std::string& what, const MeshLoadOptions& options,
+                                   const std::string& field) {
+  PrescanMeshBytes(bytes, field);
+  Assimp::Importer importer;
+  ConfigureImporter(importer);
+  importer.SetIOHandler(new MemoryIOSystem({{name, &bytes}}));  // the importer owns it
+  const aiScene* scene = importer.ReadFile(name, kPostProcess);
+  try {
+    return Convert(scene, importer, what, options, field);
+  } catch (const Error& e) {
+    if (!e.field().empty()) throw;
+    throw InputError(field, "mesh " + what + ": " + e.what());
+  }
+}
+
 }  // namespace
 
 std::shared_ptr<const Mesh> LoadMeshFile(const std::string& path, const MeshLoadOptions& options,
                                          const std::string& field) {
-  CheckScale(options, field);
+  CheckMeshScale(options, field);
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) {
     throw Error(ErrorCode::kNotFound, field, "mesh file '" + path + "' does not exist");
@@ -107,24 +178,33 @@ std::shared_ptr<const Mesh> LoadMeshFile(const std::string& path, const MeshLoad
   if (!std::filesystem::is_regular_file(path, ec)) {
     throw InputError(field, "mesh path '" + path + "' is not a regular file");
   }
-  Assimp::Importer importer;
-  ConfigureImporter(importer);
-  const aiScene* scene = importer.ReadFile(path, kPostProcess);
-  return Convert(scene, importer, "'" + path + "'", options, field);
+  std::ifstream in(path, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (!in && !in.eof()) throw InputError(field, "cannot read mesh file '" + path + "'");
+  if (bytes.empty()) throw InputError(field, "mesh file '" + path + "' is empty");
+  std::string extension = std::filesystem::path(path).extension().string();
+  if (!extension.empty()) extension.erase(0, 1);
+  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return Import(bytes, "mesh." + extension, "'" + path + "'", options, field);
 }
 
 std::shared_ptr<const Mesh> LoadMeshBytes(const std::string& bytes, const std::string& format_hint,
                                           const MeshLoadOptions& options, const std::string& field) {
-  CheckScale(options, field);
+  CheckMeshScale(options, field);
   if (bytes.empty()) throw InputError(field, "mesh data is empty");
   const std::string hint =
       !format_hint.empty() && format_hint.front() == '.' ? format_hint.substr(1) : format_hint;
-  Assimp::Importer importer;
-  ConfigureImporter(importer);
-  const aiScene* scene =
-      importer.ReadFileFromMemory(bytes.data(), bytes.size(), kPostProcess, hint.c_str());
-  return Convert(scene, importer, "(" + std::to_string(bytes.size()) + " bytes, format '" + hint + "')",
-                 options, field);
+  if (hint.empty() || hint.size() > 16) {
+    throw InputError(field, "the format hint must be a file extension of 1 to 16 characters");
+  }
+  for (char c : hint) {
+    if (!std::isalnum(static_cast<unsigned char>(c))) {
+      throw InputError(field, "the format hint must hold only letters and digits");
+    }
+  }
+  return Import(bytes, "mesh." + hint,
+                "(" + std::to_string(bytes.size()) + " bytes, format '" + hint + "')", options,
+                field);
 }
 
 }  // namespace hgraph

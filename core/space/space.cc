@@ -1,5 +1,7 @@
 #include "core/space/space.h"
 
+#include "core/common/limits.h"
+
 #include <cmath>
 #include <numbers>
 
@@ -98,17 +100,29 @@ Space::Space(std::vector<ComponentSpec> components) : components_(std::move(comp
                            "bounds must be finite with lower < upper, got [" +
                                std::to_string(c.lower[k]) + ", " + std::to_string(c.upper[k]) + "]");
         }
+        // Larger bounds overflow the extent (upper - lower), and with it every sample count.
+        for (const auto& [name, v] : {std::pair{".lower[", c.lower[k]}, {".upper[", c.upper[k]}}) {
+          if (std::abs(v) > limits::kMaxCoordinate) {
+            throw InputError(field + name + std::to_string(k) + "]",
+                             "must be in [-" + limits::Num(limits::kMaxCoordinate) + ", " +
+                                 limits::Num(limits::kMaxCoordinate) + "], got " +
+                                 limits::Num(v));
+          }
+        }
       }
     }
-    if (!std::isfinite(c.translation_weight) || c.translation_weight < 0) {
-      throw InputError(field + ".translation_weight", "must be finite and >= 0");
-    }
+    limits::RequireRange(c.translation_weight, 0, limits::kMaxWeight,
+                         field + ".translation_weight");
     if (c.rotation_weight < 0) c.rotation_weight = c.type == ComponentType::kSE2 ? 0.5 : 1.0;
-    if (!std::isfinite(c.rotation_weight)) {
-      throw InputError(field + ".rotation_weight", "must be finite and >= 0");
-    }
+    limits::RequireRange(c.rotation_weight, 0, limits::kMaxWeight, field + ".rotation_weight");
     offsets_.push_back(dimension_);
     dimension_ += size(i);
+  }
+  // A zero extent (every weight 0) makes every motion one sample long: nothing would be checked
+  // between its ends.
+  if (!(MaxExtent() > 0)) {
+    throw InputError("space.components",
+                     "the weighted extent of the space is 0: give a component a weight > 0");
   }
 }
 
@@ -212,6 +226,12 @@ void Space::Validate(const Config& q, const std::string& field) const {
   for (int k = 0; k < q.size(); ++k) {
     if (!std::isfinite(q[k])) {
       throw InputError(field + "[" + std::to_string(k) + "]", "coordinate is not finite");
+    }
+    // Farther coordinates make edge lengths (and sample counts) overflow.
+    if (std::abs(q[k]) > limits::kMaxCoordinate) {
+      throw InputError(field + "[" + std::to_string(k) + "]",
+                       "coordinate must be in [-" + limits::Num(limits::kMaxCoordinate) + ", " +
+                           limits::Num(limits::kMaxCoordinate) + "], got " + limits::Num(q[k]));
     }
   }
   for (int i = 0; i < num_components(); ++i) {

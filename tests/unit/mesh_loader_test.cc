@@ -10,9 +10,11 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <limits>
 #include <vector>
 
 #include "core/common/error.h"
+#include "core/scene/mesh_wire.h"
 
 namespace hgraph {
 namespace {
@@ -311,6 +313,104 @@ TEST_F(MeshLoaderTest, CorruptOrEmptyInputIsInputError) {
 TEST_F(MeshLoaderTest, RejectsNonPositiveScale) {
   EXPECT_THROW(LoadMeshBytes(CubeObj(), "obj", {.scale = Eigen::Vector3d(1, 0, 1)}, "m"),
                InputError);
+}
+
+// A glTF whose buffer is the file `uri`: the buffer holds three float vertices when read.
+std::string TriangleGltf(const std::string& uri) {
+  return R"({"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+  "nodes": [{"mesh": 0}], "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+  "buffers": [{"byteLength": 36, "uri": ")" + uri + R"("}],
+  "bufferViews": [{"buffer": 0, "byteLength": 36}],
+  "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                 "min": [0, 0, 0], "max": [1, 1, 0]}]})";
+}
+
+std::string Floats(const std::vector<float>& values) {
+  std::string out(values.size() * 4, '\0');
+  std::memcpy(out.data(), values.data(), out.size());
+  return out;
+}
+
+TEST_F(MeshLoaderTest, NeverOpensFilesNamedInsideAMesh) {
+  // The buffer exists beside the glTF and would load as a triangle if it were opened.
+  Write("buffer.bin", Floats({0, 0, 0, 1, 0, 0, 0, 1, 0}));
+  for (const std::string& uri : {std::string("buffer.bin"), (dir_ / "buffer.bin").string(),
+                                 std::string("../") + dir_.filename().string() + "/buffer.bin"}) {
+    std::string existing, missing;
+    try {
+      LoadMeshFile(Write("tri.gltf", TriangleGltf(uri)), {}, "m");
+      ADD_FAILURE() << uri << ": a referenced file was read";
+    } catch (const InputError& e) {
+      existing = e.what();
+    }
+    const std::string absent = uri.substr(0, uri.size() - 10) + "nothing.bi";
+    try {
+      LoadMeshBytes(TriangleGltf(absent), "gltf", {}, "m");
+    } catch (const InputError& e) {
+      missing = e.what();
+    }
+    // Whether the name exists does not show.
+    EXPECT_NE(existing.find("could not open referenced file"), std::string::npos) << existing;
+    EXPECT_NE(missing.find("could not open referenced file"), std::string::npos) << missing;
+  }
+}
+
+TEST_F(MeshLoaderTest, RefusesDeclaredCountsTheBytesCannotHold) {
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {"off", "OFF\n1000000000 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"},  // 45 bytes
+      {"off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n"},            // index past vertices
+      {"off", "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0"},                  // cut short
+      {"ply", "ply\nformat ascii 1.0\n"},                                   // header never ends
+      {"ply", "ply\nformat binary_little_endian 1.0\nelement vertex 20000000\nproperty float x\n"
+              "property float y\nproperty float z\nend_header\n" + std::string(64, '\0')},
+      {"obj", "OFF\n99999999 0 0\n"},  // the content decides, not the hint
+  };
+  for (const auto& [format, bytes] : bad) {
+    try {
+      LoadMeshBytes(bytes, format, {}, "scene.obstacles[2].shape.mesh.data");
+      ADD_FAILURE() << bytes << ": expected an error";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.field(), "scene.obstacles[2].shape.mesh.data");
+    }
+  }
+}
+
+TEST_F(MeshLoaderTest, RefusesMeshesOverTheLimits) {
+  EXPECT_THROW(LoadMeshBytes(CubeObj(), "obj", {.max_triangles = 11}, "m"), InputError);
+  EXPECT_EQ(LoadMeshBytes(CubeObj(), "obj", {.max_triangles = 12}, "m")->triangles.size(), 12u);
+  EXPECT_THROW(LoadMeshBytes(CubeObj(), "../obj", {}, "m"), InputError);
+}
+
+TEST(MeshWireTest, RoundTripsAndRefusesMalformedReplies) {
+  Mesh mesh;
+  mesh.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  mesh.triangles = {{0, 1, 2}};
+  const MeshLoadOptions limits;
+  const std::string good = EncodeMeshReply(mesh);
+  const MeshReply ok = DecodeMeshReply(good, limits);
+  ASSERT_NE(ok.mesh, nullptr);
+  EXPECT_EQ(ok.mesh->vertices, mesh.vertices);
+  EXPECT_EQ(ok.mesh->triangles, mesh.triangles);
+  EXPECT_EQ(DecodeMeshReply(EncodeMeshRefusal("no"), limits).refused, "no");
+
+  Mesh past = mesh;
+  past.triangles = {{0, 1, 3}};
+  Mesh nan = mesh;
+  nan.vertices[1].x() = std::numeric_limits<double>::quiet_NaN();
+  for (const std::string& bad :
+       {std::string("garbage"), good.substr(0, good.size() - 1), good + "x",
+        EncodeMeshReply(past), EncodeMeshReply(nan), std::string("HGMR\1\0\0\0\7\0\0\0")}) {
+    const MeshReply reply = DecodeMeshReply(bad, limits);
+    EXPECT_EQ(reply.mesh, nullptr);
+    EXPECT_FALSE(reply.malformed.empty());
+  }
+  EXPECT_EQ(DecodeMeshReply(good, {.max_vertices = 2}).mesh, nullptr);
+
+  const MeshImportRequest request{.format = "obj", .options = {}, .bytes = "v 0 0 0"};
+  const MeshImportRequest back = DecodeMeshRequest(EncodeMeshRequest(request));
+  EXPECT_EQ(back.format, "obj");
+  EXPECT_EQ(back.bytes, "v 0 0 0");
+  EXPECT_THROW(DecodeMeshRequest(EncodeMeshRequest(request) + "x"), InputError);
 }
 
 }  // namespace
