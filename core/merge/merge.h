@@ -12,6 +12,7 @@
 #include "core/hgraph/bridge_candidates.h"
 #include "core/hgraph/hgraph.h"
 #include "core/measure/measure.h"
+#include "core/merge/path_check.h"
 #include "core/motion/motion_checker.h"
 
 namespace hgraph {
@@ -30,24 +31,6 @@ struct MergeRequest {
   MergeOptions options;
   ProgressCallback progress;  // may be empty
   CancelToken cancel;
-};
-
-// Why a path is invalid (hgraph.v1.InputReport.Cause).
-enum class InvalidCause { kNone, kCollision, kOutOfBounds };
-
-// What the check of one path found (core/merge/path_check.h builds it, for a merge's inputs and
-// for CheckPaths alike).
-struct InputReport {
-  std::string name;
-  bool valid = false;
-  int invalid_edge = -1;  // first invalid edge (waypoint i to i+1), or -1
-  std::string invalid_reason;
-  PathQuality quality;
-  int waypoints = 0;
-  double invalid_at = -1;  // the motion's parameter where the check failed on invalid_edge
-  InvalidCause invalid_cause = InvalidCause::kNone;
-  // Every stretch between clearance samples of every edge proven free (EdgeReport::certified).
-  bool certified = false;
 };
 
 struct MergeStats {

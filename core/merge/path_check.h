@@ -9,10 +9,29 @@
 #include <vector>
 
 #include "core/common/progress.h"
-#include "core/merge/merge.h"
+#include "core/measure/measure.h"
 #include "core/motion/motion_checker.h"
+#include "core/path/path.h"
 
 namespace hgraph {
+
+// Why a path is invalid (hgraph.v1.InputReport.Cause).
+enum class InvalidCause { kNone, kCollision, kOutOfBounds };
+
+// What the check of one path found (ReportInputPath below builds it, for a merge's inputs and
+// for CheckPaths alike).
+struct InputReport {
+  std::string name;
+  bool valid = false;
+  int invalid_edge = -1;  // first invalid edge (waypoint i to i+1), or -1
+  std::string invalid_reason;
+  PathQuality quality;
+  int waypoints = 0;
+  double invalid_at = -1;  // the motion's parameter where the check failed on invalid_edge
+  InvalidCause invalid_cause = InvalidCause::kNone;
+  // Every stretch between clearance samples of every edge proven free (EdgeReport::certified).
+  bool certified = false;
+};
 
 enum class CheckMode {
   // Every edge with its clearance profile and the clearance certificate of

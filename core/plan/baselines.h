@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "core/hgraph/hgraph.h"
+#include "core/path/path.h"
 #include "core/motion/motion_checker.h"
 
 namespace hgraph {

@@ -12,7 +12,7 @@
 #include <ompl/base/StateValidityChecker.h>
 #include <ompl/geometric/PathGeometric.h>
 
-#include "core/hgraph/hgraph.h"
+#include "core/path/path.h"
 #include "core/motion/motion_checker.h"
 #include "core/space/space.h"
 

@@ -70,13 +70,6 @@ int FirstInvalidEdge(const MotionChecker& checker, const InputPath& path) {
   return -1;
 }
 
-double PathLength(const Space& space, const InputPath& path) {
-  double length = 0;
-  for (size_t k = 0; k + 1 < path.waypoints.size(); ++k) {
-    length += space.Distance(path.waypoints[k], path.waypoints[k + 1]);
-  }
-  return length;
-}
 
 std::string FormatSeconds(double s) {
   char text[32];

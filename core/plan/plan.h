@@ -31,7 +31,7 @@
 #include <vector>
 
 #include "core/common/progress.h"
-#include "core/hgraph/hgraph.h"
+#include "core/path/path.h"
 #include "core/motion/motion_checker.h"
 
 namespace hgraph {

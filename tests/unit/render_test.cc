@@ -6,6 +6,7 @@
 
 #include "core/collision/collision_world.h"
 #include "core/common/error.h"
+#include "core/merge/merge.h"
 #include "core/motion/local_planner.h"
 #include "core/render/svg_render.h"
 #include "tests/unit/test_scenes.h"
@@ -33,6 +34,17 @@ Scene BarScene() {
       .name = "bar",
       .shape = Shape{.type = ShapeType::kBox, .box_size = Eigen::Vector3d(1.5, 0.3, 0.3)}});
   return scene;
+}
+
+// The picture `hgraph merge --svg` draws: the inputs with their reported quality, the merged path.
+RenderRequest MergeRenderRequest(const std::vector<InputPath>& inputs, const MergeResult& result) {
+  RenderRequest request;
+  for (size_t i = 0; i < inputs.size(); ++i) {
+    request.inputs.push_back(RenderPath{.path = inputs[i], .quality = result.inputs[i].quality});
+  }
+  request.merged = RenderPath{.path = result.path, .quality = result.quality};
+  request.merged->path.name = "merged";
+  return request;
 }
 
 InputPath Path(const std::string& name, std::vector<Eigen::Vector3d> points) {
