@@ -33,7 +33,7 @@ struct RemoteOptions {
 struct CheckSettings {
   CheckMode mode = CheckMode::kCertified;
   std::optional<double> resolution;  // unset: the scene's, or 0.01
-  double k = 3.0;
+  double k = kDefaultInverseClearanceK;
 };
 
 // A path check and the resolution it ran at.

@@ -62,11 +62,11 @@ Subcommand AddImportCfgCommand(CLI::App& parent) {
   app->add_option("cfg", flags->cfg, "OMPL.app problem file")->required();
   app->add_option("--out", flags->out,
                   "Scene JSON to write (meshes referenced by path); required without --server");
-  return Subcommand{.app = app,
-                    .run = [flags] { return RunImportCfg(*flags); },
-                    .run_remote = [flags](const RemoteOptions& remote) {
-                      return RunRemoteImportCfg(*flags, remote);
-                    }};
+  return Subcommand{
+      .app = app,
+      .run = [flags] { return RunImportCfg(*flags); },
+      .run_remote =
+          [flags](const RemoteOptions& remote) { return RunRemoteImportCfg(*flags, remote); }};
 }
 
 }  // namespace hgraph::cli

@@ -16,8 +16,7 @@ int main(int argc, char** argv) {
   std::vector<Subcommand> subcommands = {
       WithServer(AddMergeCommand(app)),     WithServer(AddCheckCommand(app)),
       WithServer(AddPlanCommand(app)),      WithServer(AddRenderCommand(app)),
-      WithServer(AddImportCfgCommand(app)),
-      AddRequeryCommand(app),
+      WithServer(AddImportCfgCommand(app)), AddRequeryCommand(app),
   };
 
   try {

@@ -105,12 +105,12 @@ struct MergeRun {
 };
 
 // Runs the request; `scene` is loaded on demand (in process: always, for the merge itself).
-using MergeRunner = std::function<MergeRun(const v1::MergePathsRequest& request,
-                                           const ProgressCallback& progress)>;
+using MergeRunner =
+    std::function<MergeRun(const v1::MergePathsRequest& request, const ProgressCallback& progress)>;
 
 int RunMerge(const MergeFlags& f, const MergeRunner& run, std::optional<LoadedScene>* loaded,
-             double resolution, const v1::Scene& scene_proto,
-             const std::vector<InputPath>& paths, const v1::MergePathsRequest& request) {
+             double resolution, const v1::Scene& scene_proto, const std::vector<InputPath>& paths,
+             const v1::MergePathsRequest& request) {
   ProgressPrinter printer(!f.quiet);
   const MergeRun response = run(request, printer.callback());
   printer.Finish();
@@ -124,8 +124,8 @@ int RunMerge(const MergeFlags& f, const MergeRunner& run, std::optional<LoadedSc
   };
   ShortcutStep step;
   if (f.shortcut) {
-    step = ShortcutMergedPath(*scene().planner, result, result.measure, resolution,
-                              f.shortcut_seed);
+    step =
+        ShortcutMergedPath(*scene().planner, result, result.measure, resolution, f.shortcut_seed);
   }
   if (!f.out_path.empty()) WritePathsFile(f.out_path, {f.shortcut ? step.path : result.path});
   if (!f.svg.empty()) {
@@ -187,8 +187,9 @@ Subcommand AddMergeCommand(CLI::App& parent) {
   auto flags = std::make_shared<MergeFlags>();
   MergeFlags& f = *flags;
   CLI::App* app = parent.add_subcommand(
-      "merge", "Merge input paths into one path of higher quality (in process, or with --server "
-               "through hgraph-server).");
+      "merge",
+      "Merge input paths into one path of higher quality (in process, or with --server "
+      "through hgraph-server).");
   app->add_option("--scene", f.scene, "Scene JSON (hgraph.v1.Scene)")->required();
   app->add_option("--paths", f.paths,
                   "Input paths: PathSet JSON, or OMPL text (one configuration per line, blank "

@@ -33,8 +33,12 @@ struct PlanFlags {
 
 const std::map<std::string, std::string>& FlagNames() {
   static const std::map<std::string, std::string> names = {
-      {"planner", "--planner"}, {"count", "--count"},           {"time_s", "--time"},
-      {"start", "--scene"},     {"goal", "--scene"},            {"resolution", "--resolution"},
+      {"planner", "--planner"},
+      {"count", "--count"},
+      {"time_s", "--time"},
+      {"start", "--scene"},
+      {"goal", "--scene"},
+      {"resolution", "--resolution"},
       {"scene.resolution", "--scene"},
   };
   return names;
@@ -64,8 +68,7 @@ v1::PlanPathsRequest BuildRequest(const PlanFlags& f, const v1::Scene& scene, do
 // One line per requested path (found or not), the summary, and the exit code: 1 if fewer than
 // --count were found. The status column says only "found" or "not found", which both runs know.
 int PrintPlan(const PlanFlags& f, const v1::PlanPathsRequest& request, double straight,
-              const std::vector<PlanAttempt>& attempts,
-              const std::vector<InputPath>& paths) {
+              const std::vector<PlanAttempt>& attempts, const std::vector<InputPath>& paths) {
   int found = 0;
   std::string missing;
   for (const PlanAttempt& a : attempts) {
@@ -76,8 +79,8 @@ int PrintPlan(const PlanFlags& f, const v1::PlanPathsRequest& request, double st
                   a.waypoints, Cell(a.length, 12).c_str(),
                   Cell(straight > 0 ? a.length / straight : 0, 9, 3).c_str());
     } else {
-      std::printf("%-16s %-10s %10.1f %9s %12s %9s\n", name.c_str(), "not found", a.elapsed_ms,
-                  "-", "-", "-");
+      std::printf("%-16s %-10s %10.1f %9s %12s %9s\n", name.c_str(), "not found", a.elapsed_ms, "-",
+                  "-", "-");
       missing += (missing.empty() ? "" : ", ") + std::to_string(a.index);
     }
   }
@@ -88,8 +91,7 @@ int PrintPlan(const PlanFlags& f, const v1::PlanPathsRequest& request, double st
               request.planner().c_str(), f.time_s, static_cast<unsigned long long>(f.seed),
               write ? "; wrote " : "", write ? f.out.c_str() : "");
   if (found < f.count) {
-    std::fprintf(stderr,
-                 "error: %s found no path within %g s in %d of %d runs (index %s); %s\n",
+    std::fprintf(stderr, "error: %s found no path within %g s in %d of %d runs (index %s); %s\n",
                  request.planner().c_str(), f.time_s, f.count - found, f.count, missing.c_str(),
                  found > 0 ? "the paths found were written" : "no path was written");
     return kExitCheckFailed;
@@ -183,13 +185,13 @@ Subcommand AddPlanCommand(CLI::App& parent) {
   auto flags = std::make_shared<PlanFlags>();
   PlanFlags& f = *flags;
   CLI::App* app = parent.add_subcommand(
-      "plan", "Plan input paths for the scene's start and goal with an OMPL planner; every path "
-              "is checked with the scene's local planner. Exit 1 if fewer than --count were "
-              "found in time (those found are still written).");
+      "plan",
+      "Plan input paths for the scene's start and goal with an OMPL planner; every path "
+      "is checked with the scene's local planner. Exit 1 if fewer than --count were "
+      "found in time (those found are still written).");
   app->add_option("--scene", f.scene, "Scene JSON (hgraph.v1.Scene) with start and goal")
       ->required();
-  app->add_option("--out", f.out,
-                  "Write the paths here (.json: PathSet; otherwise OMPL text)");
+  app->add_option("--out", f.out, "Write the paths here (.json: PathSet; otherwise OMPL text)");
   app->add_option("--planner", f.planner,
                   "prm (no cycles, as the paper), prm-cycles, prmstar, rrt, rrtconnect, lazyprm")
       ->capture_default_str();

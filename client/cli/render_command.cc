@@ -126,9 +126,10 @@ Subcommand AddRenderCommand(CLI::App& parent) {
   return Subcommand{.app = app,
                     .run = [run_checked] { return run_checked({}); },
                     .run_checked = run_checked,
-                    .run_remote = [flags, run_checked](const RemoteOptions& remote) {
-                      return run_checked(RemotePathChecker(remote, flags->scene));
-                    }};
+                    .run_remote =
+                        [flags, run_checked](const RemoteOptions& remote) {
+                          return run_checked(RemotePathChecker(remote, flags->scene));
+                        }};
 }
 
 }  // namespace hgraph::cli

@@ -11,9 +11,10 @@
 namespace hgraph::cli {
 
 Subcommand AddRequeryCommand(CLI::App& parent) {
-  CLI::App* app = parent.add_subcommand(
-      "requery", "Search an H-Graph kept by hgraph-server under another measure (no new "
-                 "collision checks where stored clearance profiles suffice)");
+  CLI::App* app =
+      parent.add_subcommand("requery",
+                            "Search an H-Graph kept by hgraph-server under another measure (no new "
+                            "collision checks where stored clearance profiles suffice)");
   auto flags = std::make_shared<RemoteOptions>();
   auto hgraph = std::make_shared<std::string>();
   auto out = std::make_shared<std::string>();

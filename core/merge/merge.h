@@ -19,7 +19,7 @@ namespace hgraph {
 
 struct MergeOptions {
   CandidateOptions candidates;
-  double endpoint_tolerance = 1e-6;
+  double endpoint_tolerance = kEndpointTolerance;
   int threads = 0;  // worker threads; 0 = all cores
   // > 0: input edges longer than this are subdivided in the H-Graph (see HGraph); 0 = off.
   double max_node_spacing = 0;

@@ -53,8 +53,8 @@ const char* InvalidCauseName(InvalidCause cause);
 struct PathCheckRequest {
   std::vector<InputPath> paths;
   CheckMode mode = CheckMode::kCertified;
-  double k = 3.0;   // exponent of the reported inverse clearance, >= 0
-  int threads = 0;  // worker threads; 0 = all cores
+  double k = kDefaultInverseClearanceK;  // exponent of the reported inverse clearance, >= 0
+  int threads = 0;                       // worker threads; 0 = all cores
   // Names the paths in errors: "<field>[i].waypoints[j]" (the service passes "paths.paths").
   std::string field = "paths";
   ProgressCallback progress;  // phase "check", one unit per edge; may be empty

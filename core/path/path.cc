@@ -15,8 +15,8 @@ double PathLength(const Space& space, const InputPath& path) {
 void ValidatePath(const Space& space, const InputPath& path, const std::string& field,
                   size_t min_waypoints) {
   if (path.waypoints.size() < min_waypoints) {
-    throw InputError(field, "needs at least " + std::to_string(min_waypoints) +
-                                " waypoints, got " + std::to_string(path.waypoints.size()));
+    throw InputError(field, "needs at least " + std::to_string(min_waypoints) + " waypoints, got " +
+                                std::to_string(path.waypoints.size()));
   }
   for (size_t i = 0; i < path.waypoints.size(); ++i) {
     space.Validate(path.waypoints[i], field + ".waypoints[" + std::to_string(i) + "]");

@@ -9,6 +9,10 @@
 
 namespace hgraph {
 
+// How far the first (last) waypoint of an input may be from the shared start (goal): the merge's
+// default endpoint tolerance, and what a planned path's ends may deviate before they are snapped.
+inline constexpr double kEndpointTolerance = 1e-6;
+
 // A discrete input path. Plain struct; copyable.
 struct InputPath {
   std::string name;
