@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 
 #include "core/adapter/merge_proto.h"
 #include "core/adapter/scene_proto.h"
@@ -179,8 +180,16 @@ void PrintQualityRow(const std::string& name, int waypoints, bool valid, const P
 void PrintMergeTable(const MergeResult& r) {
   std::printf("%-20s %9s %5s %12s %10s %10s %14s\n", "path", "waypoints", "valid", "length",
               "min clear", "avg clear", ("inv clear k=" + Cell(r.quality.k, 0, 3)).c_str());
+  bool unchecked = false;
   for (const InputReport& input : r.inputs) {
-    PrintQualityRow(input.name, input.waypoints, input.valid, input.quality);
+    PathQuality q = input.quality;
+    if (!input.checked) {
+      // Only the length is known (lazy evaluation without --report-inputs).
+      q.min_clearance = q.avg_clearance = q.inverse_clearance =
+          std::numeric_limits<double>::quiet_NaN();
+      unchecked = true;
+    }
+    PrintQualityRow(input.name + (input.checked ? "" : " *"), input.waypoints, input.valid, q);
   }
   PrintQualityRow("merged", static_cast<int>(r.path.waypoints.size()), true, r.quality);
   for (const InputReport& input : r.inputs) {
@@ -188,6 +197,10 @@ void PrintMergeTable(const MergeResult& r) {
       std::printf("  %s: edge %d invalid: %s\n", input.name.c_str(), input.invalid_edge,
                   input.invalid_reason.c_str());
     }
+  }
+  if (unchecked) {
+    std::printf("  * not every edge checked (lazy evaluation): length only; --report-inputs "
+                "checks them all\n");
   }
   std::printf("measure %s (%s variant): objective %s", MeasureTypeName(r.measure.type),
               VariantName(r.variant), Cell(r.objective, 0).c_str());
@@ -199,12 +212,14 @@ void PrintMergeTable(const MergeResult& r) {
   const MergeStats& s = r.stats;
   std::printf(
       "stats: %lld nodes, %lld input edges (%lld invalid), %lld candidates, %lld edges checked, "
-      "%lld valid, %lld reused, %lld collision checks, %lld distance queries, %d threads\n",
+      "%lld valid, %lld reused, %lld collision checks, %lld distance queries, %lld search "
+      "rounds, %d threads\n",
       static_cast<long long>(s.nodes), static_cast<long long>(s.input_edges),
       static_cast<long long>(s.input_edges_invalid), static_cast<long long>(s.candidate_edges),
       static_cast<long long>(s.edges_checked), static_cast<long long>(s.edges_valid),
       static_cast<long long>(s.edges_reused), static_cast<long long>(s.collision_checks),
-      static_cast<long long>(s.distance_queries), s.threads);
+      static_cast<long long>(s.distance_queries), static_cast<long long>(s.search_rounds),
+      s.threads);
   const MergeTiming& t = r.timing;
   std::printf(
       "timing (ms): validate %.1f, inputs %.1f, align %.1f, candidates %.1f, check %.1f, "

@@ -38,6 +38,8 @@ struct MergeFlags {
   double resolution = 0;
   double endpoint_tolerance = 0;
   double max_node_spacing = 0;
+  std::string evaluation = "lazy";
+  bool report_inputs = false;
   int threads = 0;
   bool quiet = false;
   bool shortcut = false;
@@ -88,6 +90,10 @@ v1::MergePathsRequest BuildRequest(const MergeFlags& f, const v1::Scene& scene,
       options->set_endpoint_tolerance(f.endpoint_tolerance);
     }
     if (f.max_node_spacing_opt->count() > 0) options->set_max_node_spacing(f.max_node_spacing);
+    options->set_evaluation(ParseEvaluation(f.evaluation, "--evaluation") == Evaluation::kEager
+                                ? v1::EVALUATION_EAGER
+                                : v1::EVALUATION_LAZY);
+    options->set_report_inputs(f.report_inputs);
     options->set_threads(f.threads);
     MeasureFromProto(request.measure());
     MergeOptionsFromProto(*options);
@@ -222,6 +228,13 @@ Subcommand AddMergeCommand(CLI::App& parent) {
       "--max-node-spacing", f.max_node_spacing,
       "Subdivide input edges longer than this in the H-Graph, so bridges can leave an input "
       "mid-edge (configuration distance; default 0 = waypoints only)");
+  app->add_option("--evaluation", f.evaluation,
+                  "lazy: check only the edges of the paths the search would take; eager: check "
+                  "every candidate first")
+      ->capture_default_str();
+  app->add_flag("--report-inputs", f.report_inputs,
+                "Check every input edge with its clearance, so every input is fully reported "
+                "(always so with --evaluation eager)");
   app->add_option("--threads", f.threads, "Worker threads (0 = all cores)")->capture_default_str();
   app->add_flag("-q,--quiet", f.quiet, "No progress on stderr");
   app->add_flag("--shortcut", f.shortcut,

@@ -48,16 +48,6 @@ void ValidateMeasure(const MeasureSpec& spec) {
   }
 }
 
-bool NeedsClearance(const MeasureSpec& spec) {
-  switch (spec.type) {
-    case MeasureType::kLength: return false;
-    case MeasureType::kInverseClearance: return spec.k != 0;
-    case MeasureType::kBottleneckClearance: return true;
-    case MeasureType::kSafeLength: return spec.safety > 0;
-  }
-  return true;
-}
-
 double InverseClearanceIntegral(const EdgeReport& report, double k) {
   if (k == 0) return report.length;
   HGRAPH_CHECK(report.has_clearance && report.profile.size() >= 2);
@@ -123,38 +113,138 @@ PathQuality QualityAccumulator::Finish() const {
   return q;
 }
 
-double AdditiveEdgeCost(const MeasureSpec& spec, const EdgeReport& report) {
-  switch (spec.type) {
-    case MeasureType::kLength: return report.length;
-    case MeasureType::kInverseClearance: return InverseClearanceIntegral(report, spec.k);
-    case MeasureType::kSafeLength:
-      if (spec.safety > 0 && MinClearance(report) < spec.safety) return kInf;
-      return report.length;
-    case MeasureType::kBottleneckClearance: break;
+namespace {
+
+// Integral of x^-k over [a, b], 0 < a <= b.
+double PowerIntegral(double a, double b, double k) {
+  if (b <= a) return 0;
+  if (k == 1) return std::log(b / a);
+  return (std::pow(b, 1 - k) - std::pow(a, 1 - k)) / (1 - k);
+}
+
+class LengthMeasure final : public Measure {
+ public:
+  explicit LengthMeasure(const MeasureSpec& spec) : Measure(spec) {}
+  Combine combine() const override { return Combine::kSum; }
+  bool needs_clearance() const override { return false; }
+  double EdgeValue(const EdgeReport& report) const override { return report.length; }
+  // Exact for a valid edge: a lazy length search returns the exhaustive optimum.
+  double EdgeBound(const EdgeBoundInput& edge) const override { return edge.length; }
+  double cost_per_distance() const override { return 1; }
+  double Objective(const PathQuality& quality) const override { return quality.length; }
+};
+
+class InverseClearanceMeasure final : public Measure {
+ public:
+  explicit InverseClearanceMeasure(const MeasureSpec& spec) : Measure(spec) {}
+  Combine combine() const override { return Combine::kSum; }
+  bool needs_clearance() const override { return spec().k != 0; }
+  double EdgeValue(const EdgeReport& report) const override {
+    return InverseClearanceIntegral(report, spec().k);
   }
-  HGRAPH_CHECK(false && "bottleneck clearance is not additive");
-  return kInf;
+  double cost_per_distance() const override { return spec().k == 0 ? 1 : 0; }
+  // Clearance changes no faster than robot points move, so along the edge it is at most
+  // u(t) = min(c0 + D t, c1 + D (1 - t)) (c0, c1 the end clearances, D the motion bound). The
+  // profile's samples lie under u, and u^-k is convex (a convex decreasing function of a concave
+  // one), so the trapezoid sum over any samples is at least length * integral of u^-k.
+  double EdgeBound(const EdgeBoundInput& edge) const override {
+    const double k = spec().k;
+    if (k == 0) return edge.length;
+    const double c0 = edge.clearance_from;
+    const double c1 = edge.clearance_to;
+    if (!(c0 > 0) || !(c1 > 0)) return kInf;  // an end in contact: the edge cannot be valid
+    if (edge.length <= 0) return 0;
+    if (!std::isfinite(c0) || !std::isfinite(c1) || !std::isfinite(edge.motion_bound)) return 0;
+    const double d = edge.motion_bound;
+    double integral;
+    if (d <= 1e-12 * std::max(c0, c1)) {
+      integral = std::pow(std::min(c0, c1), -k);
+    } else {
+      // u peaks where the two lines meet, at t* in [0, 1].
+      const double peak = std::clamp((c1 - c0 + d) / (2 * d), 0.0, 1.0);
+      integral =
+          (PowerIntegral(c0, c0 + d * peak, k) + PowerIntegral(c1, c1 + d * (1 - peak), k)) / d;
+    }
+    // A little slack for rounding: the bound must never exceed the checked cost.
+    return edge.length * integral * (1 - 1e-9);
+  }
+  double Objective(const PathQuality& quality) const override {
+    return spec().k == 0 ? quality.length : quality.inverse_clearance;
+  }
+};
+
+class BottleneckMeasure final : public Measure {
+ public:
+  explicit BottleneckMeasure(const MeasureSpec& spec) : Measure(spec) {}
+  Combine combine() const override { return Combine::kBottleneck; }
+  bool needs_clearance() const override { return true; }
+  double EdgeValue(const EdgeReport& report) const override { return MinClearance(report); }
+  // The profile starts and ends at the edge's end configurations, so its minimum is at most
+  // theirs.
+  double EdgeBound(const EdgeBoundInput& edge) const override {
+    return std::min(edge.clearance_from, edge.clearance_to);
+  }
+  double Objective(const PathQuality& quality) const override { return -quality.min_clearance; }
+};
+
+class SafeLengthMeasure final : public Measure {
+ public:
+  explicit SafeLengthMeasure(const MeasureSpec& spec) : Measure(spec) {}
+  Combine combine() const override { return Combine::kSum; }
+  bool needs_clearance() const override { return spec().safety > 0; }
+  double EdgeValue(const EdgeReport& report) const override {
+    if (spec().safety > 0 && MinClearance(report) < spec().safety) return kInf;
+    return report.length;
+  }
+  // An edge whose end is closer than C to an obstacle is unusable without a check.
+  double EdgeBound(const EdgeBoundInput& edge) const override {
+    if (spec().safety > 0 && std::min(edge.clearance_from, edge.clearance_to) < spec().safety) {
+      return kInf;
+    }
+    return edge.length;
+  }
+  double cost_per_distance() const override { return 1; }
+  double Objective(const PathQuality& quality) const override {
+    if (spec().safety > 0 && quality.min_clearance < spec().safety) return kInf;
+    return quality.length;
+  }
+};
+
+}  // namespace
+
+std::unique_ptr<const Measure> Measure::Make(const MeasureSpec& spec) {
+  ValidateMeasure(spec);
+  switch (spec.type) {
+    case MeasureType::kLength: return std::make_unique<LengthMeasure>(spec);
+    case MeasureType::kInverseClearance: return std::make_unique<InverseClearanceMeasure>(spec);
+    case MeasureType::kBottleneckClearance: return std::make_unique<BottleneckMeasure>(spec);
+    case MeasureType::kSafeLength: return std::make_unique<SafeLengthMeasure>(spec);
+  }
+  throw InputError("measure.type", "unknown measure");
+}
+
+bool Measure::Better(const PathQuality& a, const PathQuality& b) const {
+  const double oa = Objective(a);
+  const double ob = Objective(b);
+  if (oa != ob) return oa < ob;
+  if (combine() == Combine::kBottleneck) return a.length < b.length;
+  return false;
+}
+
+double AdditiveEdgeCost(const MeasureSpec& spec, const EdgeReport& report) {
+  const auto measure = Measure::Make(spec);
+  HGRAPH_CHECK(measure->combine() == Measure::Combine::kSum);
+  return measure->EdgeValue(report);
 }
 
 double Objective(const MeasureSpec& spec, const PathQuality& quality) {
-  switch (spec.type) {
-    case MeasureType::kLength: return quality.length;
-    case MeasureType::kInverseClearance:
-      return spec.k == 0 ? quality.length : quality.inverse_clearance;
-    case MeasureType::kBottleneckClearance: return -quality.min_clearance;
-    case MeasureType::kSafeLength:
-      if (spec.safety > 0 && quality.min_clearance < spec.safety) return kInf;
-      return quality.length;
-  }
-  return kInf;
+  return Measure::Make(spec)->Objective(quality);
 }
 
 bool Better(const MeasureSpec& spec, const PathQuality& a, const PathQuality& b) {
-  const double oa = Objective(spec, a);
-  const double ob = Objective(spec, b);
-  if (oa != ob) return oa < ob;
-  if (spec.type == MeasureType::kBottleneckClearance) return a.length < b.length;
-  return false;
+  return Measure::Make(spec)->Better(a, b);
 }
+
+bool NeedsClearance(const MeasureSpec& spec) { return Measure::Make(spec)->needs_clearance(); }
 
 }  // namespace hgraph

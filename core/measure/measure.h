@@ -3,6 +3,7 @@
 #pragma once
 
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -67,6 +68,60 @@ class QualityAccumulator {
   double clearance_integral_ = 0;
   bool all_have_clearance_ = true;
   int edges_ = 0;
+};
+
+// What is known of an edge before it is checked: its length (Space::Distance), the clearance at
+// its two end configurations (infinity when not computed), and how far any robot point moves
+// along it (MotionChecker::MotionBound; infinity when unknown).
+struct EdgeBoundInput {
+  double length = 0;
+  double clearance_from = std::numeric_limits<double>::infinity();
+  double clearance_to = std::numeric_limits<double>::infinity();
+  double motion_bound = std::numeric_limits<double>::infinity();
+};
+
+// A quality measure as the search sees it (paper, Appendix): the value of a checked edge, a bound
+// on it before the check (so that a lazy search checks only the edges of the paths it would
+// take), how values combine along a path, and the objective of a path. Immutable and thread
+// safe; not copyable (polymorphic); made by Make.
+class Measure {
+ public:
+  // kSum: a path's cost is the sum of its edges' costs (smaller is better). kBottleneck: a path's
+  // width is the minimum of its edges' widths (larger is better), ties broken by length.
+  enum class Combine { kSum, kBottleneck };
+
+  // Validates the spec (ValidateMeasure) and returns its measure.
+  static std::unique_ptr<const Measure> Make(const MeasureSpec& spec);
+
+  Measure(const Measure&) = delete;
+  Measure& operator=(const Measure&) = delete;
+  virtual ~Measure() = default;
+
+  const MeasureSpec& spec() const { return spec_; }
+  virtual Combine combine() const = 0;
+  // True if an edge's value needs its clearance profile (EdgeReport::has_clearance).
+  virtual bool needs_clearance() const = 0;
+  // True if EdgeBound uses the clearance at the edge's end configurations.
+  virtual bool needs_node_clearance() const { return needs_clearance(); }
+  // The value of a valid, checked edge (with its profile if needs_clearance): its cost (kSum;
+  // infinity = unusable) or its width (kBottleneck: its minimum clearance).
+  virtual double EdgeValue(const EdgeReport& report) const = 0;
+  // Before the check: a lower bound on the cost (kSum) or an upper bound on the width
+  // (kBottleneck) that EdgeValue can return for this edge if it turns out valid.
+  virtual double EdgeBound(const EdgeBoundInput& edge) const = 0;
+  // Cost-to-go lower bound per unit of configuration distance, for A* (kSum; 0 = none).
+  virtual double cost_per_distance() const { return 0; }
+  // The value the measure optimises, smaller is better: length, inverse clearance, -min
+  // clearance (bottleneck), or length (safe length; infinity if below C).
+  virtual double Objective(const PathQuality& quality) const = 0;
+  // True if quality a is strictly better than b (bottleneck ties broken by length).
+  bool Better(const PathQuality& a, const PathQuality& b) const;
+
+ protected:
+  explicit Measure(const MeasureSpec& spec) : spec_(spec) {}
+
+ private:
+  MeasureSpec spec_;
 };
 
 // Cost of a valid edge under an additive measure (length, inverse clearance, safe length; for

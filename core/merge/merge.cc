@@ -9,17 +9,29 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <mutex>
 
 #include "core/common/error.h"
 #include "core/common/parallel.h"
 #include "core/merge/path_check.h"
+#include "core/merge/shortcut.h"
 #include "core/search/search.h"
 
 namespace hgraph {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+// Edges the lazy search checks at a time (core/search/search.h): enough to keep the worker
+// threads busy, few enough that little is checked on speculation. Fixed, so that the checks and
+// the counts do not depend on the thread count. On grid (three PRM inputs, all-pairs) batches of
+// 1, 2, 4 and 8 check 9654, 9661, 9665 and 9682 edges.
+constexpr int kLazyBatch = 8;
+
+// The automatic post-optimization's budget, and the gain below which a round ends it.
+constexpr double kAutomaticOptimizeMs = 2000;
+constexpr double kOptimizeMinGain = 1e-3;
 
 int ResolveThreads(int threads) {
   if (threads < 0) throw InputError("options.threads", "must be >= 0 (0 = all cores)");
@@ -105,6 +117,21 @@ EdgeReport JoinParts(const std::vector<EdgePart>& parts) {
 
 }  // namespace
 
+const char* EvaluationName(Evaluation evaluation) {
+  switch (evaluation) {
+    case Evaluation::kLazy: return "lazy";
+    case Evaluation::kEager: return "eager";
+  }
+  return "?";
+}
+
+Evaluation ParseEvaluation(const std::string& name, const std::string& field) {
+  for (Evaluation e : {Evaluation::kLazy, Evaluation::kEager}) {
+    if (name == EvaluationName(e)) return e;
+  }
+  throw InputError(field, "unknown evaluation '" + name + "' (expected lazy or eager)");
+}
+
 HybridizationSession::HybridizationSession(const MotionChecker& checker,
                                            const MergeRequest& request)
     : checker_(&checker), options_(request.options), graph_(([&]() -> HGraph {
@@ -115,25 +142,34 @@ HybridizationSession::HybridizationSession(const MotionChecker& checker,
                       request.options.max_node_spacing);
       })()) {
   const Clock::time_point started = Clock::now();
+  const Space& space = checker.space();
+  const bool eager = options_.evaluation == Evaluation::kEager;
   build_stats_.threads = ResolveThreads(options_.threads);
   build_stats_.nodes = graph_.num_nodes();
+  goal_distance_.resize(graph_.num_nodes());
+  for (int n = 0; n < graph_.num_nodes(); ++n) {
+    goal_distance_[n] = space.Distance(graph_.node(n).q, graph_.node(graph_.goal()).q);
+  }
+  node_clearance_.assign(graph_.num_nodes(), std::numeric_limits<double>::quiet_NaN());
   build_timing_.validate_ms = MsSince(started);
 
-  // Input edges carry their clearance profile: every result reports the clearance of each input.
+  // Input edges carry their clearance profile when every input is reported.
   Clock::time_point phase = Clock::now();
   std::vector<int> input_edges(graph_.num_edges());
   for (int e = 0; e < graph_.num_edges(); ++e) input_edges[e] = e;
   build_stats_.input_edges = graph_.num_edges();
-  CheckEdges(input_edges, /*need_clearance=*/true, "inputs", request.progress, request.cancel,
-             &build_stats_.edges_checked);
-  for (int e : input_edges) {
-    if (graph_.edge(e).report.state == EdgeState::kInvalid) ++build_stats_.input_edges_invalid;
+  if (eager || options_.report_inputs) {
+    CheckEdges(input_edges, /*need_clearance=*/true, "inputs", request.progress, request.cancel,
+               &build_stats_.edges_checked);
+    for (int e : input_edges) {
+      if (graph_.edge(e).report.state == EdgeState::kInvalid) ++build_stats_.input_edges_invalid;
+    }
   }
   build_timing_.inputs_ms = MsSince(phase);
 
   phase = Clock::now();
   request.cancel.ThrowIfStopped();
-  const CandidateSet candidates = BridgeCandidates(graph_, checker.space(), options_.candidates);
+  const CandidateSet candidates = BridgeCandidates(graph_, space, options_.candidates);
   const bool aligned = options_.candidates.variant == Variant::kEditDistance ||
                        options_.candidates.variant == Variant::kEditDistanceNeighborhood;
   (aligned ? build_timing_.align_ms : build_timing_.candidates_ms) = MsSince(phase);
@@ -145,11 +181,19 @@ HybridizationSession::HybridizationSession(const MotionChecker& checker,
   std::vector<int> bridge_edges;
   bridge_edges.reserve(candidates.pairs.size());
   for (const auto& [u, v] : candidates.pairs) bridge_edges.push_back(graph_.AddEdge(u, v, false));
+  edge_length_.resize(graph_.num_edges());
+  for (int e = 0; e < graph_.num_edges(); ++e) {
+    edge_length_[e] =
+        space.Distance(graph_.node(graph_.edge(e).u).q, graph_.node(graph_.edge(e).v).q);
+  }
+  motion_bound_.assign(graph_.num_edges(), std::numeric_limits<double>::quiet_NaN());
 
-  phase = Clock::now();
-  CheckEdges(bridge_edges, NeedsClearance(request.measure), "check", request.progress,
-             request.cancel, &build_stats_.edges_checked);
-  build_timing_.check_ms = MsSince(phase);
+  if (eager) {
+    phase = Clock::now();
+    CheckEdges(bridge_edges, NeedsClearance(request.measure), "check", request.progress,
+               request.cancel, &build_stats_.edges_checked);
+    build_timing_.check_ms = MsSince(phase);
+  }
   for (int e = 0; e < graph_.num_edges(); ++e) {
     if (graph_.edge(e).report.state == EdgeState::kValid) ++build_stats_.edges_valid;
   }
@@ -177,7 +221,7 @@ void HybridizationSession::CheckEdges(const std::vector<int>& edge_ids, bool nee
                           edge.report = checker_->CheckEdge(
                               EdgeCheckRequest{.from = &graph_.node(edge.u).q,
                                                .to = &graph_.node(edge.v).q,
-                                               .mode = !need_clearance ? EdgeCheckMode::kSampled
+                                               .mode = !(need_clearance || edge.input) ? EdgeCheckMode::kSampled
                                                        : previous.state == EdgeState::kValid
                                                            ? EdgeCheckMode::kClearanceOfValid
                                                            : EdgeCheckMode::kClearance});
@@ -194,13 +238,221 @@ void HybridizationSession::CheckEdges(const std::vector<int>& edge_ids, bool nee
   *checked += total;
 }
 
-MergeResult HybridizationSession::Query(const MeasureSpec& measure,
-                                        const ProgressCallback& progress,
+int64_t HybridizationSession::ComputeNodeClearances(const CancelToken& cancel) {
+  std::vector<int> missing;
+  for (int n = 0; n < graph_.num_nodes(); ++n) {
+    if (std::isnan(node_clearance_[n])) missing.push_back(n);
+  }
+  RunWithThreads(ResolveThreads(options_.threads), [&] {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, missing.size(), 1),
+                      [&](const tbb::blocked_range<size_t>& range) {
+                        for (size_t k = range.begin(); k != range.end(); ++k) {
+                          if (cancel.stopped()) return;
+                          const int n = missing[k];
+                          node_clearance_[n] = checker_->Clearance(graph_.node(n).q);
+                        }
+                      });
+  });
+  cancel.ThrowIfStopped();
+  return static_cast<int64_t>(missing.size());
+}
+
+EdgeBoundInput HybridizationSession::BoundInput(int e) {
+  const HEdge& edge = graph_.edge(e);
+  if (std::isnan(motion_bound_[e])) {
+    motion_bound_[e] = checker_->MotionBound(graph_.node(edge.u).q, graph_.node(edge.v).q);
+  }
+  const auto clearance = [&](int n) {
+    return std::isnan(node_clearance_[n]) ? std::numeric_limits<double>::infinity()
+                                          : node_clearance_[n];
+  };
+  return EdgeBoundInput{.length = edge_length_[e],
+                        .clearance_from = clearance(edge.u),
+                        .clearance_to = clearance(edge.v),
+                        .motion_bound = motion_bound_[e]};
+}
+
+void HybridizationSession::SyncEdgeData() {
+  const Space& space = checker_->space();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (int n = static_cast<int>(goal_distance_.size()); n < graph_.num_nodes(); ++n) {
+    goal_distance_.push_back(space.Distance(graph_.node(n).q, graph_.node(graph_.goal()).q));
+    node_clearance_.push_back(nan);
+  }
+  for (int e = static_cast<int>(edge_length_.size()); e < graph_.num_edges(); ++e) {
+    const HEdge& edge = graph_.edge(e);
+    edge_length_.push_back(space.Distance(graph_.node(edge.u).q, graph_.node(edge.v).q));
+    motion_bound_.push_back(nan);
+  }
+}
+
+SearchResult HybridizationSession::SearchBest(const Measure& measure, bool profile,
+                                              const ProgressCallback& progress,
+                                              const CancelToken& cancel, MergeResult* result,
+                                              int64_t* rechecked) {
+  SyncEdgeData();
+  const bool needs_clearance = measure.needs_clearance();
+  if (options_.evaluation == Evaluation::kLazy && measure.needs_node_clearance()) {
+    const Clock::time_point phase = Clock::now();
+    result->stats.node_clearances += ComputeNodeClearances(cancel);
+    result->timing.check_ms += MsSince(phase);
+  }
+  // How the search sees an edge: invalid ones not at all, checked ones (with a profile where the
+  // measure needs one) by their value, the others by the measure's bound.
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const ExactFn exact = [&](int e) {
+    const EdgeReport& report = graph_.edge(e).report;
+    return report.state == EdgeState::kInvalid ||
+           (report.state == EdgeState::kValid && (!needs_clearance || report.has_clearance));
+  };
+  const SearchEdgeFn see = [&](int e) {
+    const EdgeReport& report = graph_.edge(e).report;
+    if (report.state == EdgeState::kInvalid) {
+      return SearchEdge{.value = nan, .length = edge_length_[e]};
+    }
+    if (exact(e)) return SearchEdge{.value = measure.EdgeValue(report), .length = edge_length_[e]};
+    return SearchEdge{.value = measure.EdgeBound(BoundInput(e)), .length = edge_length_[e]};
+  };
+  std::vector<double> cost_to_go;
+  if (measure.cost_per_distance() > 0) {
+    cost_to_go.resize(graph_.num_nodes());
+    for (int n = 0; n < graph_.num_nodes(); ++n) {
+      cost_to_go[n] = measure.cost_per_distance() * goal_distance_[n];
+    }
+  }
+
+  // Lazy search: edges are seen through their bounds and checked only when the search would
+  // settle a node through them (core/search/search.h); eager evaluation has checked them all
+  // already. Then, with `profile`, the path's own edges get clearance profiles so that every
+  // measure can be reported; the clearance check refines between samples and can find a
+  // collision the validity check missed, and then the search runs again.
+  for (;;) {
+    Clock::time_point phase = Clock::now();
+    double checking_ms = 0;
+    LazySearchStats lazy;
+    const EvaluateFn evaluate = [&](const std::vector<int>& edges) {
+      const Clock::time_point checking = Clock::now();
+      CheckEdges(edges, needs_clearance, "check", progress, cancel, rechecked);
+      checking_ms += MsSince(checking);
+    };
+    SearchResult best =
+        FindBestPathLazy(graph_, measure, see, exact, evaluate,
+                         cost_to_go.empty() ? nullptr : &cost_to_go, kLazyBatch, &lazy);
+    result->stats.search_rounds += lazy.evaluations + 1;
+    result->timing.check_ms += checking_ms;
+    result->timing.search_ms += MsSince(phase) - checking_ms;
+    if (!best.found) {
+      if (measure.spec().type == MeasureType::kSafeLength) {
+        throw Error(
+            ErrorCode::kFailedPrecondition, "measure.safety",
+            "no path in the H-Graph keeps clearance >= " + std::to_string(measure.spec().safety));
+      }
+      throw Error(ErrorCode::kFailedPrecondition, "paths",
+                  "the valid edges of the H-Graph do not connect start and goal (are the "
+                  "inputs valid?)");
+    }
+    if (!profile) return best;
+    phase = Clock::now();
+    std::vector<int> output_recheck;
+    for (int e : best.edges) {
+      if (!graph_.edge(e).report.has_clearance) output_recheck.push_back(e);
+    }
+    CheckEdges(output_recheck, true, "evaluate", progress, cancel, rechecked);
+    result->timing.evaluate_ms += MsSince(phase);
+    bool still_valid = true;
+    for (int e : output_recheck) {
+      still_valid = still_valid && graph_.edge(e).report.state == EdgeState::kValid;
+    }
+    if (still_valid) return best;
+  }
+}
+
+SearchResult HybridizationSession::Optimize(const Measure& measure, SearchResult best,
+                                            const ProgressCallback& progress,
+                                            const CancelToken& cancel, MergeResult* result,
+                                            int64_t* rechecked) {
+  const MeasureType type = measure.spec().type;
+  if (options_.optimize_ms == 0 ||
+      (type != MeasureType::kLength && type != MeasureType::kSafeLength)) {
+    return best;
+  }
+  const Clock::time_point started = Clock::now();
+  const double budget_ms = options_.optimize_ms > 0 ? options_.optimize_ms : kAutomaticOptimizeMs;
+  const Space& space = checker_->space();
+  // Bridges from a shortcut's new points reach the nodes within the H-Graph's own scale.
+  const double reach =
+      build_stats_.radius > 0 ? build_stats_.radius : 2 * MeanInputEdgeLength(graph_, space);
+  double objective = measure.Objective(EvaluateEdges(graph_, best.edges, measure.spec().k));
+  SearchResult found = best;
+  for (int round = 1; MsSince(started) < budget_ms; ++round) {
+    cancel.ThrowIfStopped();
+    ShortcutRequest request{.path = {.name = "shortcut"},
+                            .seed = static_cast<uint64_t>(round),
+                            .safety = type == MeasureType::kSafeLength ? measure.spec().safety : 0};
+    for (int n : found.nodes) {
+      request.path.waypoints.push_back(graph_.node(n).q);
+      request.ids.push_back(n);
+    }
+    for (int e : found.edges) request.edges.push_back(graph_.edge(e).report);
+    const ShortcutResult shortcut = ShortcutCertified(*checker_, request, cancel);
+    *rechecked += shortcut.edges_checked;
+    ++result->stats.optimize_rounds;
+    if (shortcut.accepted == 0) break;
+    result->stats.shortcuts += shortcut.accepted;
+
+    // The shortcut path joins the H-Graph: its new points as nodes, its checked edges with their
+    // reports, unchecked bridges from the new points to the nodes near them.
+    std::vector<int> ids = shortcut.ids;
+    std::vector<int> fresh;
+    for (size_t j = 0; j < ids.size(); ++j) {
+      if (ids[j] >= 0) continue;
+      ids[j] = graph_.AddNode(shortcut.path.waypoints[j]);
+      fresh.push_back(ids[j]);
+    }
+    for (size_t j = 0; j + 1 < ids.size(); ++j) {
+      if (ids[j] == ids[j + 1]) continue;
+      const int e = graph_.AddEdge(ids[j], ids[j + 1], false);
+      if (graph_.edge(e).report.state == EdgeState::kUnchecked) {
+        graph_.mutable_edge(e).report = shortcut.edges[j];
+      }
+    }
+    for (int u : fresh) {
+      for (int v = 0; v < graph_.num_nodes(); ++v) {
+        if (v == u || space.Distance(graph_.node(u).q, graph_.node(v).q) > reach) continue;
+        graph_.AddEdge(u, v, false);
+      }
+    }
+    // Profiled, so that every objective streamed is that of a certified path.
+    SearchResult next = SearchBest(measure, /*profile=*/true, progress, cancel, result, rechecked);
+    const double next_objective =
+        measure.Objective(EvaluateEdges(graph_, next.edges, measure.spec().k));
+    const bool improved = next_objective < objective * (1 - kOptimizeMinGain);
+    if (next_objective < objective) {
+      found = std::move(next);
+      objective = next_objective;
+      if (progress) {
+        progress(Progress{.phase = "optimize",
+                          .done = round,
+                          .total = 0,
+                          .collision_checks = 0,
+                          .distance_queries = 0,
+                          .elapsed_ms = MsSince(started),
+                          .objective = objective});
+      }
+    }
+    if (!improved) break;
+  }
+  result->timing.optimize_ms += MsSince(started);
+  return found;
+}
+
+MergeResult HybridizationSession::Query(const MeasureSpec& spec, const ProgressCallback& progress,
                                         const CancelToken& cancel) {
-  ValidateMeasure(measure);
+  const std::unique_ptr<const Measure> measure = Measure::Make(spec);
+  const bool needs_clearance = measure->needs_clearance();
   const Clock::time_point started = Clock::now();
   MergeResult result;
-  result.measure = measure;
+  result.measure = spec;
   result.variant = options_.candidates.variant;
   const bool first = first_query_;
   first_query_ = false;
@@ -220,53 +472,27 @@ MergeResult HybridizationSession::Query(const MeasureSpec& measure,
   }
   const int64_t checks_before = checker_->total_collision_checks();
   const int64_t queries_before = checker_->total_distance_queries();
-
-  // Valid edges that lack a clearance profile get one now; everything else is reused.
-  Clock::time_point phase = Clock::now();
-  std::vector<int> recheck;
-  if (NeedsClearance(measure)) {
-    for (int e = 0; e < graph_.num_edges(); ++e) {
-      const EdgeReport& report = graph_.edge(e).report;
-      if (report.state == EdgeState::kValid && !report.has_clearance) recheck.push_back(e);
-    }
-  }
   int64_t rechecked = 0;
-  CheckEdges(recheck, true, "clearance", progress, cancel, &rechecked);
+
+  Clock::time_point phase = Clock::now();
+  if (options_.evaluation == Evaluation::kEager) {
+    // Every valid edge that lacks a clearance profile gets one now; everything else is reused.
+    std::vector<int> recheck;
+    if (needs_clearance) {
+      for (int e = 0; e < graph_.num_edges(); ++e) {
+        const EdgeReport& report = graph_.edge(e).report;
+        if (report.state == EdgeState::kValid && !report.has_clearance) recheck.push_back(e);
+      }
+    }
+    CheckEdges(recheck, true, "clearance", progress, cancel, &rechecked);
+  }
   result.timing.check_ms += MsSince(phase);
 
-  // The output's own edges get clearance profiles so that every measure can be reported. The
-  // clearance check refines between samples and can find a collision the validity check missed;
-  // then the edge is invalid from now on and the search runs again.
-  SearchResult best;
-  double evaluate_ms = 0;
-  for (;;) {
-    phase = Clock::now();
-    best = FindBestPath(graph_, measure);
-    result.timing.search_ms += MsSince(phase);
-    if (!best.found) {
-      if (measure.type == MeasureType::kSafeLength) {
-        throw Error(ErrorCode::kFailedPrecondition, "measure.safety",
-                    "no path in the H-Graph keeps clearance >= " + std::to_string(measure.safety));
-      }
-      throw Error(ErrorCode::kFailedPrecondition, "paths",
-                  "the valid edges of the H-Graph do not connect start and goal (are the "
-                  "inputs valid?)");
-    }
-    phase = Clock::now();
-    std::vector<int> output_recheck;
-    for (int e : best.edges) {
-      if (!graph_.edge(e).report.has_clearance) output_recheck.push_back(e);
-    }
-    CheckEdges(output_recheck, true, "evaluate", progress, cancel, &rechecked);
-    evaluate_ms += MsSince(phase);
-    bool still_valid = true;
-    for (int e : output_recheck) {
-      still_valid = still_valid && graph_.edge(e).report.state == EdgeState::kValid;
-    }
-    if (still_valid) break;
-  }
+  SearchResult best = SearchBest(*measure, /*profile=*/true, progress, cancel, &result, &rechecked);
+  result.hgraph_objective = measure->Objective(EvaluateEdges(graph_, best.edges, spec.k));
+  best = Optimize(*measure, std::move(best), progress, cancel, &result, &rechecked);
   phase = Clock::now();
-  result.quality = EvaluateEdges(graph_, best.edges, measure.k);
+  result.quality = EvaluateEdges(graph_, best.edges, spec.k);
   for (int n : best.nodes) {
     const HNode& node = graph_.node(n);
     // An input that repeats a waypoint gives a zero-length edge; the output lists it once.
@@ -280,7 +506,7 @@ MergeResult HybridizationSession::Query(const MeasureSpec& measure,
     result.source_fraction.push_back(node.t);
   }
   result.path.name = "merged";
-  result.objective = Objective(measure, result.quality);
+  result.objective = measure->Objective(result.quality);
 
   // Every input, under every measure, from the reports stored on its edges.
   PathQuality best_quality;
@@ -290,6 +516,8 @@ MergeResult HybridizationSession::Query(const MeasureSpec& measure,
     // One report per edge of the input (from waypoint j to j + 1), joined from the H-Graph edges
     // subdivision cut it into; nullptr where the input does not move in the H-Graph.
     std::vector<std::vector<EdgePart>> parts(std::max<size_t>(input.waypoints.size(), 2) - 1);
+    std::vector<std::vector<EdgeReport>> estimated(parts.size());
+    bool checked = true;
     for (size_t j = 0; j + 1 < ids.size(); ++j) {
       if (ids[j] == ids[j + 1]) continue;
       const int e = graph_.FindEdge(ids[j], ids[j + 1]);
@@ -299,7 +527,14 @@ MergeResult HybridizationSession::Query(const MeasureSpec& measure,
       // The shared start and goal nodes carry path 0's indices.
       const int index = j == 0 ? 0 : from.index;
       const double t1 = (j + 2 == ids.size() || to.t == 0) ? 1.0 : to.t;
-      parts[index].push_back(EdgePart{.report = &graph_.edge(e).report,
+      const EdgeReport* report = &graph_.edge(e).report;
+      if (report->state == EdgeState::kUnchecked) {
+        // Not checked by this lazy merge: its length is known, nothing else.
+        checked = false;
+        estimated[index].push_back(
+            EdgeReport{.state = EdgeState::kValid, .length = edge_length_[e]});
+      }
+      parts[index].push_back(EdgePart{.report = report,
                                       .reversed = graph_.edge(e).u != ids[j],
                                       .t0 = j == 0 ? 0.0 : from.t,
                                       .t1 = t1});
@@ -308,18 +543,26 @@ MergeResult HybridizationSession::Query(const MeasureSpec& measure,
     std::vector<const EdgeReport*> edges(parts.size(), nullptr);
     for (size_t j = 0; j < parts.size(); ++j) {
       if (parts[j].empty()) continue;
+      size_t next_estimate = 0;
+      for (EdgePart& part : parts[j]) {
+        if (part.report->state == EdgeState::kUnchecked)
+          part.report = &estimated[j][next_estimate++];
+      }
       joined[j] = JoinParts(parts[j]);
       edges[j] = &joined[j];
     }
-    InputReport report = ReportInputPath(checker_->space(), graph_.path(p), edges, measure.k);
-    if (report.valid && (result.best_input < 0 || Better(measure, report.quality, best_quality))) {
+    InputReport report = ReportInputPath(checker_->space(), graph_.path(p), edges, spec.k);
+    report.checked = checked;
+    if (!checked) report.certified = false;
+    if (checked && report.valid &&
+        (result.best_input < 0 || measure->Better(report.quality, best_quality))) {
       result.best_input = p;
       best_quality = report.quality;
     }
     result.inputs.push_back(std::move(report));
   }
-  if (result.best_input >= 0) result.best_input_objective = Objective(measure, best_quality);
-  result.timing.evaluate_ms = evaluate_ms + MsSince(phase);
+  if (result.best_input >= 0) result.best_input_objective = measure->Objective(best_quality);
+  result.timing.evaluate_ms += MsSince(phase);
 
   const int64_t query_checks = checker_->total_collision_checks() - checks_before;
   const int64_t query_queries = checker_->total_distance_queries() - queries_before;
@@ -356,6 +599,9 @@ size_t HybridizationSession::memory_bytes() const {
   for (int p = 0; p < graph_.num_paths(); ++p) {
     for (const Config& q : graph_.path(p).waypoints) bytes += q.size() * sizeof(double);
   }
+  bytes += (edge_length_.capacity() + motion_bound_.capacity() + node_clearance_.capacity() +
+            goal_distance_.capacity()) *
+           sizeof(double);
   return bytes;
 }
 

@@ -31,6 +31,11 @@ struct InputReport {
   InvalidCause invalid_cause = InvalidCause::kNone;
   // Every stretch between clearance samples of every edge proven free (EdgeReport::certified).
   bool certified = false;
+  // Every edge of the path was checked, so `valid` and the qualities are established. False
+  // when lazy evaluation without report_inputs left some edges unchecked: the length is exact,
+  // the path is invalid if a checked edge is (invalid_edge names it), and no clearance is
+  // reported.
+  bool checked = true;
 };
 
 enum class CheckMode {

@@ -244,6 +244,16 @@ double LocalPlanner::Clearance(const Config& q) const {
   return impl_->Context(*world_).Clearance(q);
 }
 
+double LocalPlanner::MotionBound(const Config& a, const Config& b) const {
+  double bound = 0;
+  for (size_t i = 0; i < impl_->body_component.size(); ++i) {
+    const int c = impl_->body_component[i];
+    bound += space().TranslationDistance(c, a, b) +
+             impl_->body_radius[i] * space().RotationAngle(c, a, b);
+  }
+  return bound;
+}
+
 int64_t LocalPlanner::total_collision_checks() const { return impl_->collision_checks.load(); }
 int64_t LocalPlanner::total_distance_queries() const { return impl_->distance_queries.load(); }
 

@@ -40,6 +40,7 @@ class LocalPlanner final : public MotionChecker {
   EdgeReport CheckEdge(const EdgeCheckRequest& request) const override;
   bool IsValid(const Config& q) const override;
   double Clearance(const Config& q) const override;
+  double MotionBound(const Config& a, const Config& b) const override;
   int64_t total_collision_checks() const override;
   int64_t total_distance_queries() const override;
 

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "core/space/space.h"
@@ -84,6 +85,15 @@ class MotionChecker {
   virtual EdgeReport CheckEdge(const EdgeCheckRequest& request) const = 0;
   virtual bool IsValid(const Config& q) const = 0;
   virtual double Clearance(const Config& q) const = 0;
+  // An upper bound on how far any point of the robot moves along the straight motion from a to
+  // b (and so on how much the clearance can change along it: clearance is 1-Lipschitz in that
+  // displacement). Lazy evaluation bounds an unchecked edge's clearance with it. Infinity when
+  // the checker cannot say.
+  virtual double MotionBound(const Config& a, const Config& b) const {
+    (void)a;
+    (void)b;
+    return std::numeric_limits<double>::infinity();
+  }
   // Totals over every query this checker ran so far (for progress and stats).
   virtual int64_t total_collision_checks() const = 0;
   virtual int64_t total_distance_queries() const = 0;

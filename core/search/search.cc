@@ -1,7 +1,7 @@
 #include "core/search/search.h"
 
 #include <algorithm>
-#include <functional>
+#include <cmath>
 #include <limits>
 #include <queue>
 
@@ -12,44 +12,47 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-bool Usable(const HEdge& edge) { return edge.report.state == EdgeState::kValid; }
-
 struct Tree {
   std::vector<double> value;
   std::vector<int> via_edge;  // edge into the node on the best path, or -1
 };
 
-// Dijkstra from the start node over valid edges; `cost` returns infinity for an unusable edge.
-Tree ShortestPaths(const HGraph& graph, const std::function<double(const HEdge&)>& cost) {
+// A* (Dijkstra without a heuristic) from the start node; `cost` returns infinity for an edge the
+// search must not use.
+template <typename Cost>
+Tree ShortestPaths(const HGraph& graph, const Cost& cost, const std::vector<double>* cost_to_go) {
   Tree tree{std::vector<double>(graph.num_nodes(), kInf), std::vector<int>(graph.num_nodes(), -1)};
+  std::vector<char> closed(graph.num_nodes(), 0);
+  const auto h = [&](int n) { return cost_to_go != nullptr ? (*cost_to_go)[n] : 0.0; };
   using Item = std::pair<double, int>;
   std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;
   tree.value[graph.start()] = 0;
-  queue.emplace(0.0, graph.start());
+  queue.emplace(h(graph.start()), graph.start());
   while (!queue.empty()) {
-    const auto [d, u] = queue.top();
+    const int u = queue.top().second;
     queue.pop();
-    if (d > tree.value[u]) continue;
+    if (closed[u]) continue;
+    closed[u] = 1;
     if (u == graph.goal()) break;
+    const double d = tree.value[u];
     for (const auto& [v, e] : graph.neighbours(u)) {
-      const HEdge& edge = graph.edge(e);
-      if (!Usable(edge)) continue;
-      const double c = cost(edge);
-      if (c == kInf) continue;
+      if (closed[v]) continue;
+      const double c = cost(e);
+      if (!(c < kInf)) continue;
       const double nd = d + c;
       if (nd < tree.value[v]) {
         tree.value[v] = nd;
         tree.via_edge[v] = e;
-        queue.emplace(nd, v);
+        queue.emplace(nd + h(v), v);
       }
     }
   }
   return tree;
 }
 
-// Largest achievable minimum edge clearance from start to goal (the widest path value), or -1
-// if the goal cannot be reached.
-double WidestPathValue(const HGraph& graph) {
+// Largest achievable minimum edge width from start to goal (the widest path value), or -1 if the
+// goal cannot be reached.
+double WidestPathValue(const HGraph& graph, const SearchEdgeFn& edge) {
   std::vector<double> width(graph.num_nodes(), -1.0);
   using Item = std::pair<double, int>;
   std::priority_queue<Item> queue;  // max-heap on width
@@ -61,9 +64,9 @@ double WidestPathValue(const HGraph& graph) {
     if (w < width[u]) continue;
     if (u == graph.goal()) break;
     for (const auto& [v, e] : graph.neighbours(u)) {
-      const HEdge& edge = graph.edge(e);
-      if (!Usable(edge)) continue;
-      const double nw = std::min(w, MinClearance(edge.report));
+      const double value = edge(e).value;
+      if (std::isnan(value)) continue;
+      const double nw = std::min(w, value);
       if (nw > width[v]) {
         width[v] = nw;
         queue.emplace(nw, v);
@@ -73,7 +76,7 @@ double WidestPathValue(const HGraph& graph) {
   return width[graph.goal()];
 }
 
-SearchResult Extract(const HGraph& graph, const Tree& tree, const MeasureSpec& spec) {
+SearchResult Extract(const HGraph& graph, const Tree& tree) {
   SearchResult result;
   if (tree.value[graph.goal()] == kInf) return result;
   int node = graph.goal();
@@ -89,12 +92,147 @@ SearchResult Extract(const HGraph& graph, const Tree& tree, const MeasureSpec& s
   std::reverse(result.nodes.begin(), result.nodes.end());
   std::reverse(result.edges.begin(), result.edges.end());
   result.found = true;
-  result.quality = EvaluateEdges(graph, result.edges, spec.k);
-  result.objective = Objective(spec, result.quality);
+  result.value = tree.value[graph.goal()];
+  return result;
+}
+
+// One entry of the lazy open list: `node` reached through `edge` from a settled node whose value
+// is `parent_value`; `key` is the entry's value (kSum: cost so far plus cost to go; widest:
+// width so far) from the edge's bound or its exact value.
+struct LazyEntry {
+  double key = 0;
+  double parent_value = 0;
+  int node = 0;
+  int edge = -1;
+};
+
+// The lazy search over one combine rule. `kWidest`: maximise the minimum edge value; otherwise
+// minimise the sum. `see` returns NaN (or +inf for sums) for unusable edges.
+template <bool kWidest>
+SearchResult LazySearch(const HGraph& graph, const SearchEdgeFn& see, const ExactFn& exact,
+                        const EvaluateFn& evaluate, const std::vector<double>* cost_to_go,
+                        int batch, LazySearchStats* stats) {
+  const auto h = [&](int n) { return cost_to_go != nullptr ? (*cost_to_go)[n] : 0.0; };
+  // Key of an entry through an edge of value `value` from a parent of value `parent`; NaN if the
+  // edge is unusable.
+  const auto key_of = [&](double parent, double value, int node) {
+    if (std::isnan(value)) return std::numeric_limits<double>::quiet_NaN();
+    if constexpr (kWidest) {
+      return std::min(parent, value);
+    } else {
+      if (!(value < kInf)) return std::numeric_limits<double>::quiet_NaN();
+      return parent + value + h(node);
+    }
+  };
+  const auto worse = [](const LazyEntry& a, const LazyEntry& b) {
+    if constexpr (kWidest) {
+      return a.key < b.key;  // max-heap on width
+    } else {
+      return a.key > b.key;  // min-heap on cost
+    }
+  };
+  std::priority_queue<LazyEntry, std::vector<LazyEntry>, decltype(worse)> open(worse);
+  std::vector<double> value(graph.num_nodes(), kWidest ? -1.0 : kInf);
+  std::vector<int> via_edge(graph.num_nodes(), -1);
+  std::vector<char> closed(graph.num_nodes(), 0);
+  open.push(LazyEntry{.key = kWidest ? kInf : h(graph.start()),
+                      .parent_value = kWidest ? kInf : 0.0,
+                      .node = graph.start(),
+                      .edge = -1});
+  std::vector<LazyEntry> pending;
+  std::vector<int> to_check;
+  while (!open.empty()) {
+    const LazyEntry top = open.top();
+    open.pop();
+    if (closed[top.node]) continue;
+    if (top.edge >= 0 && !exact(top.edge)) {
+      // Check this edge and the next most promising unchecked ones together.
+      pending.assign(1, top);
+      while (static_cast<int>(pending.size()) < batch && !open.empty()) {
+        const LazyEntry& next = open.top();
+        if (closed[next.node]) {
+          open.pop();
+          continue;
+        }
+        if (next.edge < 0 || exact(next.edge)) break;
+        pending.push_back(next);
+        open.pop();
+      }
+      to_check.clear();
+      for (const LazyEntry& entry : pending) to_check.push_back(entry.edge);
+      std::sort(to_check.begin(), to_check.end());
+      to_check.erase(std::unique(to_check.begin(), to_check.end()), to_check.end());
+      evaluate(to_check);
+      if (stats != nullptr) {
+        ++stats->evaluations;
+        stats->edges_evaluated += static_cast<int64_t>(to_check.size());
+      }
+      for (LazyEntry entry : pending) {
+        HGRAPH_CHECK(exact(entry.edge));
+        entry.key = key_of(entry.parent_value, see(entry.edge).value, entry.node);
+        if (!std::isnan(entry.key)) open.push(entry);
+      }
+      continue;
+    }
+    closed[top.node] = 1;
+    value[top.node] =
+        kWidest ? top.key : top.parent_value + (top.edge >= 0 ? see(top.edge).value : 0.0);
+    via_edge[top.node] = top.edge;
+    if (top.node == graph.goal()) break;
+    for (const auto& [v, e] : graph.neighbours(top.node)) {
+      if (closed[v]) continue;
+      const double key = key_of(value[top.node], see(e).value, v);
+      if (std::isnan(key)) continue;
+      open.push(LazyEntry{.key = key, .parent_value = value[top.node], .node = v, .edge = e});
+    }
+  }
+  SearchResult result;
+  if (!closed[graph.goal()]) return result;
+  int node = graph.goal();
+  result.nodes.push_back(node);
+  while (node != graph.start()) {
+    const int e = via_edge[node];
+    HGRAPH_CHECK(e >= 0);
+    result.edges.push_back(e);
+    const HEdge& edge = graph.edge(e);
+    node = edge.u == node ? edge.v : edge.u;
+    result.nodes.push_back(node);
+  }
+  std::reverse(result.nodes.begin(), result.nodes.end());
+  std::reverse(result.edges.begin(), result.edges.end());
+  result.found = true;
+  result.value = value[graph.goal()];
   return result;
 }
 
 }  // namespace
+
+SearchResult FindBestPathLazy(const HGraph& graph, const Measure& measure, const SearchEdgeFn& see,
+                              const ExactFn& exact, const EvaluateFn& evaluate,
+                              const std::vector<double>* cost_to_go, int batch,
+                              LazySearchStats* stats) {
+  batch = std::max(1, batch);
+  if (measure.combine() == Measure::Combine::kSum) {
+    return LazySearch<false>(graph, see, exact, evaluate, cost_to_go, batch, stats);
+  }
+  // The widest path's width, exactly; then the shortest path whose every edge is at least that
+  // wide (the eager search's tie break), lazily again.
+  const SearchResult widest = LazySearch<true>(graph, see, exact, evaluate, nullptr, batch, stats);
+  if (!widest.found) return widest;
+  const double width = widest.value;
+  const SearchEdgeFn wide_enough = [&](int e) {
+    const SearchEdge s = see(e);
+    return SearchEdge{.value = !std::isnan(s.value) && s.value >= width
+                                   ? s.length
+                                   : std::numeric_limits<double>::quiet_NaN(),
+                      .length = s.length};
+  };
+  SearchResult result =
+      LazySearch<false>(graph, wide_enough, exact, evaluate, nullptr, batch, stats);
+  if (!result.found) return widest;  // cannot happen: the widest path itself qualifies
+  result.value = width;
+  return result;
+}
 
 PathQuality EvaluateEdges(const HGraph& graph, const std::vector<int>& edges, double k) {
   QualityAccumulator accumulator(k);
@@ -102,26 +240,42 @@ PathQuality EvaluateEdges(const HGraph& graph, const std::vector<int>& edges, do
   return accumulator.Finish();
 }
 
-SearchResult FindBestPath(const HGraph& graph, const MeasureSpec& spec) {
-  switch (spec.type) {
-    case MeasureType::kLength:
-    case MeasureType::kInverseClearance:
-    case MeasureType::kSafeLength: {
-      const Tree tree = ShortestPaths(
-          graph, [&spec](const HEdge& edge) { return AdditiveEdgeCost(spec, edge.report); });
-      return Extract(graph, tree, spec);
-    }
-    case MeasureType::kBottleneckClearance: {
-      // Maximise the bottleneck, then take the shortest path among those that attain it.
-      const double width = WidestPathValue(graph);
-      if (width < 0) return SearchResult{};
-      const Tree tree = ShortestPaths(graph, [width](const HEdge& edge) {
-        return MinClearance(edge.report) >= width ? edge.report.length : kInf;
-      });
-      return Extract(graph, tree, spec);
-    }
+SearchResult FindBestPath(const HGraph& graph, const Measure& measure, const SearchEdgeFn& edge,
+                          const std::vector<double>* cost_to_go) {
+  if (measure.combine() == Measure::Combine::kSum) {
+    const auto cost = [&edge](int e) {
+      const double value = edge(e).value;
+      return std::isnan(value) ? kInf : value;
+    };
+    return Extract(graph, ShortestPaths(graph, cost, cost_to_go));
   }
-  return SearchResult{};
+  // Maximise the bottleneck, then take the shortest path among those that attain it.
+  const double width = WidestPathValue(graph, edge);
+  if (width < 0) return SearchResult{};
+  const auto cost = [&edge, width](int e) {
+    const SearchEdge s = edge(e);
+    return !std::isnan(s.value) && s.value >= width ? s.length : kInf;
+  };
+  SearchResult result = Extract(graph, ShortestPaths(graph, cost, nullptr));
+  result.value = width;
+  return result;
+}
+
+SearchResult FindBestPath(const HGraph& graph, const MeasureSpec& spec) {
+  const auto measure = Measure::Make(spec);
+  const auto edge = [&](int e) {
+    const EdgeReport& report = graph.edge(e).report;
+    if (report.state != EdgeState::kValid ||
+        (measure->needs_clearance() && !report.has_clearance)) {
+      return SearchEdge{.value = std::numeric_limits<double>::quiet_NaN(), .length = report.length};
+    }
+    return SearchEdge{.value = measure->EdgeValue(report), .length = report.length};
+  };
+  SearchResult result = FindBestPath(graph, *measure, edge);
+  if (!result.found) return result;
+  result.quality = EvaluateEdges(graph, result.edges, spec.k);
+  result.objective = measure->Objective(result.quality);
+  return result;
 }
 
 }  // namespace hgraph

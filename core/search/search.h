@@ -1,9 +1,12 @@
-// Graph search on an H-Graph under a measure: Dijkstra for additive measures, widest path for
-// bottleneck clearance (then shortest among the widest), and Dijkstra over edges whose clearance
-// is at least C for safe length. Only valid edges are used; clearance-based measures need every
-// valid edge to carry its clearance profile.
+// Graph search on an H-Graph under a measure (core/measure): A* / Dijkstra for additive
+// measures, widest path for bottleneck clearance (then shortest among the widest), Dijkstra over
+// edges whose clearance is at least C for safe length. The search sees each edge through a
+// function, so the same search runs on checked edges (their exact values) and, for lazy
+// evaluation, on unchecked ones (the measure's bounds).
 #pragma once
 
+#include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "core/hgraph/hgraph.h"
@@ -15,12 +18,47 @@ struct SearchResult {
   bool found = false;
   std::vector<int> nodes;  // start ... goal
   std::vector<int> edges;  // edge ids between consecutive nodes
-  PathQuality quality;
-  double objective = 0;  // Objective(spec, quality)
+  PathQuality quality;     // filled by FindBestPath(graph, spec) only
+  double objective = 0;    // Objective(spec, quality), likewise
+  // The path's value as the search saw it: its cost (kSum) or width (kBottleneck).
+  double value = 0;
 };
 
-// Returns the best start-goal path of `graph` under `spec`, or found == false if the valid
-// edges do not connect start and goal (or, for safe length, not with clearance >= C).
+// An edge as the search sees it: its value under the measure (Measure::EdgeValue or EdgeBound;
+// NaN for an edge the search must not use) and its length.
+struct SearchEdge {
+  double value = 0;
+  double length = 0;
+};
+using SearchEdgeFn = std::function<SearchEdge(int edge)>;
+
+// The best start-goal path under `measure`, edges seen through `edge`. `cost_to_go`, if not
+// null, holds per node a lower bound on the cost from it to the goal (consistent: an A*
+// heuristic; kSum only). found == false if the usable edges do not connect start and goal.
+SearchResult FindBestPath(const HGraph& graph, const Measure& measure, const SearchEdgeFn& edge,
+                          const std::vector<double>* cost_to_go = nullptr);
+
+// Lazy search (lazy weighted A*, and its widest-path analogue for bottleneck measures): an edge
+// enters the open list with its bound and is checked only when the search would settle a node
+// through it; then it goes back with its exact value. Returns the same optimum as
+// FindBestPath(graph, measure, see) on the checked graph, with far fewer checks: once a node is
+// settled, no other edge into it is checked. `exact(e)` says whether `see(e)` is exact;
+// `evaluate(edges)` checks the edges so that `see` is exact for them afterwards. The search
+// evaluates up to `batch` edges at a time (the most promising ones), so a parallel `evaluate`
+// keeps several threads busy. The path's edges are all exact on return.
+using ExactFn = std::function<bool(int edge)>;
+using EvaluateFn = std::function<void(const std::vector<int>& edges)>;
+struct LazySearchStats {
+  int64_t evaluations = 0;  // calls of `evaluate`
+  int64_t edges_evaluated = 0;
+};
+SearchResult FindBestPathLazy(const HGraph& graph, const Measure& measure, const SearchEdgeFn& see,
+                              const ExactFn& exact, const EvaluateFn& evaluate,
+                              const std::vector<double>* cost_to_go, int batch,
+                              LazySearchStats* stats);
+
+// The best path over the checked valid edges (every one with a profile if the measure needs
+// clearance), with its quality and objective.
 SearchResult FindBestPath(const HGraph& graph, const MeasureSpec& spec);
 
 // Quality of a given edge sequence (every edge must be valid; clearance fields are filled only

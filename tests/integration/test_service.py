@@ -285,12 +285,14 @@ def test_over_limit_batch_and_bad_values(client):
 
 
 def test_check_paths_reports_what_merge_reports(client):
-    merged = client.merge(input_paths(), measure="inverse-clearance", k=2).result
+    merged = client.merge(input_paths(), measure="inverse-clearance", k=2,
+                          report_inputs=True).result
     checked = client.check(input_paths(), k=2)
     assert checked.valid and len(checked.paths) == 2
     assert checked.collision_checks > 0 and checked.distance_queries > 0
     assert checked.resolution == pytest.approx(0.001)  # the scene's
     for mine, theirs in zip(checked.paths, merged.inputs):
+        assert theirs.checked
         assert mine.name == theirs.name
         assert mine.certified == theirs.certified
         assert mine.quality == theirs.quality  # bit for bit: the same check

@@ -5,10 +5,12 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 
 #include "core/collision/collision_world.h"
 #include "core/common/error.h"
+#include "core/merge/path_check.h"
 #include "core/motion/local_planner.h"
 #include "tests/unit/test_scenes.h"
 
@@ -115,10 +117,16 @@ TEST_P(MergePropertyTest, EveryVariantAndMeasureKeepsTheInvariants) {
     for (Variant variant : {Variant::kAllPairs, Variant::kNeighborhood, Variant::kKNearest,
                             Variant::kEditDistance, Variant::kEditDistanceNeighborhood}) {
       SCOPED_TRACE(std::string(VariantName(variant)) + " / " + MeasureTypeName(measure.type));
-      const MergeResult r =
-          Merge(planner, MergeRequest{.paths = inputs,
-                                      .measure = measure,
-                                      .options = {.candidates = {.variant = variant}}});
+      // Lazy with every input reported, lazy alone, eager: same candidates, same checks. Every
+      // measure here (the safety is one some input meets) has a path in every mode.
+      std::vector<MergeResult> runs;
+      for (const MergeOptions& options :
+           {MergeOptions{.candidates = {.variant = variant}, .report_inputs = true},
+            MergeOptions{.candidates = {.variant = variant}},
+            MergeOptions{.candidates = {.variant = variant}, .evaluation = Evaluation::kEager}}) {
+        runs.push_back(
+            Merge(planner, MergeRequest{.paths = inputs, .measure = measure, .options = options}));
+      }
       if (measure.type == MeasureType::kSafeLength) {
         // A safety nothing in the scene meets fails, naming the field.
         try {
@@ -131,20 +139,55 @@ TEST_P(MergePropertyTest, EveryVariantAndMeasureKeepsTheInvariants) {
           EXPECT_EQ(e.field(), "measure.safety") << e.what();
         }
       }
-      ExpectValid(planner, r.path);
-      EXPECT_TRUE(r.path.waypoints.front().isApprox(inputs[0].waypoints.front()));
-      EXPECT_TRUE(r.path.waypoints.back().isApprox(inputs[0].waypoints.back()));
-      ASSERT_GE(r.best_input, 0);
-      EXPECT_LE(r.objective, r.best_input_objective + 1e-9);
-      for (const InputReport& input : r.inputs) {
-        if (input.valid) {
-          EXPECT_FALSE(Better(measure, input.quality, r.quality)) << input.name;
+      for (const MergeResult& r : runs) {
+        ExpectValid(planner, r.path);
+        EXPECT_TRUE(r.path.waypoints.front().isApprox(inputs[0].waypoints.front()));
+        EXPECT_TRUE(r.path.waypoints.back().isApprox(inputs[0].waypoints.back()));
+        EXPECT_TRUE(r.quality.has_clearance);
+        EXPECT_GT(r.quality.min_clearance, 0);
+        for (const InputReport& input : r.inputs) {
+          if (input.valid && input.checked) {
+            EXPECT_FALSE(Better(measure, input.quality, r.quality)) << input.name;
+          }
+        }
+      }
+      const MergeResult& reported = runs[0];
+      const MergeResult& lazy = runs[1];
+      const MergeResult& eager = runs[2];
+      for (const MergeResult* r : {&reported, &eager}) {
+        ASSERT_GE(r->best_input, 0);
+        EXPECT_LE(r->objective, r->best_input_objective + 1e-9);
+        for (const InputReport& input : r->inputs) EXPECT_TRUE(input.checked);
+      }
+      // Lazy returns the eager H-Graph optimum: exactly for length and bottleneck clearance
+      // (their bounds are exact or attained), never worse for the others.
+      const double eps = 1e-9 * (1 + std::abs(eager.hgraph_objective));
+      if (measure.type == MeasureType::kLength ||
+          measure.type == MeasureType::kBottleneckClearance) {
+        EXPECT_NEAR(lazy.hgraph_objective, eager.hgraph_objective, eps);
+      } else {
+        EXPECT_LE(lazy.hgraph_objective, eager.hgraph_objective + eps);
+      }
+      EXPECT_NEAR(reported.hgraph_objective, lazy.hgraph_objective, eps);
+      EXPECT_LE(lazy.stats.edges_checked, eager.stats.edges_checked);
+      for (const MergeResult& r : runs) {
+        // The post-optimization never makes the H-Graph optimum worse; it runs for length only
+        // among these measures (and safe length).
+        EXPECT_LE(r.objective, r.hgraph_objective + eps);
+        if (measure.type == MeasureType::kLength) {
+          EXPECT_GT(r.stats.optimize_rounds, 0);
+        }
+        if (measure.type == MeasureType::kInverseClearance ||
+            measure.type == MeasureType::kBottleneckClearance) {
+          EXPECT_EQ(r.objective, r.hgraph_objective);
+          EXPECT_EQ(r.stats.optimize_rounds, 0);
         }
       }
       if (variant == Variant::kAllPairs) {
-        all_pairs_objective = r.objective;
+        all_pairs_objective = eager.hgraph_objective;
       } else {
-        EXPECT_LE(all_pairs_objective, r.objective + 1e-9) << "all-pairs is never worse";
+        EXPECT_LE(all_pairs_objective, eager.hgraph_objective + 1e-9)
+            << "all-pairs is never worse";
       }
     }
   }
@@ -156,7 +199,8 @@ TEST_F(MergeTest, RequeryReusesEveryCheck) {
   const LocalPlanner planner = MakePlanner();
   HybridizationSession session(
       planner, MergeRequest{.paths = CirclePaths(),
-                            .measure = {.type = MeasureType::kInverseClearance, .k = 3}});
+                            .measure = {.type = MeasureType::kInverseClearance, .k = 3},
+                            .options = {.evaluation = Evaluation::kEager, .optimize_ms = 0}});
   const MergeResult first = session.Query({.type = MeasureType::kInverseClearance, .k = 3});
   EXPECT_GT(first.stats.distance_queries, 0);
   // Every valid edge already carries its clearance profile: nothing new to check.
@@ -173,7 +217,9 @@ TEST_F(MergeTest, RequeryReusesEveryCheck) {
 
 TEST_F(MergeTest, LengthFirstThenClearancePaysOnlyForMissingProfiles) {
   const LocalPlanner planner = MakePlanner();
-  HybridizationSession session(planner, MergeRequest{.paths = CirclePaths()});
+  HybridizationSession session(
+      planner, MergeRequest{.paths = CirclePaths(),
+                            .options = {.evaluation = Evaluation::kEager, .optimize_ms = 0}});
   const MergeResult first = session.Query({});
   const MergeResult second = session.Query({.type = MeasureType::kInverseClearance, .k = 3});
   EXPECT_GT(second.stats.distance_queries, 0);
@@ -186,13 +232,42 @@ TEST_F(MergeTest, LengthFirstThenClearancePaysOnlyForMissingProfiles) {
   EXPECT_LE(first.quality.length, third.quality.length + 1e-12);
 }
 
+TEST_F(MergeTest, LazyRequeryProfilesOnlyWhatItsSearchWants) {
+  const LocalPlanner planner = MakePlanner();
+  const MergeOptions options{.candidates = {.variant = Variant::kAllPairs}};
+  MergeOptions eager_options = options;
+  eager_options.evaluation = Evaluation::kEager;
+  HybridizationSession lazy(planner, MergeRequest{.paths = CirclePaths(), .options = options});
+  HybridizationSession eager(planner,
+                             MergeRequest{.paths = CirclePaths(), .options = eager_options});
+  const MergeResult lazy_length = lazy.Query({});
+  const MergeResult eager_length = eager.Query({});
+  EXPECT_NEAR(lazy_length.objective, eager_length.objective, 1e-9);
+  EXPECT_LT(lazy_length.stats.edges_checked, eager_length.stats.edges_checked);
+  const MergeResult lazy_bottleneck = lazy.Query({.type = MeasureType::kBottleneckClearance});
+  const MergeResult eager_bottleneck = eager.Query({.type = MeasureType::kBottleneckClearance});
+  EXPECT_NEAR(lazy_bottleneck.objective, eager_bottleneck.objective, 1e-9);
+  EXPECT_NEAR(lazy_bottleneck.quality.length, eager_bottleneck.quality.length, 1e-9);
+  // Eager profiles every valid edge; lazy the nodes and the edges its searches took.
+  EXPECT_LT(lazy_bottleneck.stats.distance_queries, eager_bottleneck.stats.distance_queries);
+  EXPECT_GT(lazy_bottleneck.stats.node_clearances, 0);
+  EXPECT_GT(lazy_bottleneck.stats.search_rounds, 1);
+  // The same query again reuses what the first one checked (its batches may still check a few
+  // edges its own search order reaches).
+  const MergeResult again = lazy.Query({.type = MeasureType::kBottleneckClearance});
+  EXPECT_LT(again.stats.edges_checked, lazy_bottleneck.stats.edges_checked);
+  EXPECT_EQ(again.stats.node_clearances, 0);
+  EXPECT_NEAR(again.objective, lazy_bottleneck.objective, 1e-12);
+}
+
 TEST_F(MergeTest, InvalidInputEdgeIsReportedAndNotUsed) {
   const LocalPlanner planner = MakePlanner();
   std::vector<InputPath> inputs = CirclePaths();
   // Straight through the discs from start to goal.
   inputs.push_back(InputPath{
       .name = "straight", .waypoints = {inputs[0].waypoints.front(), inputs[0].waypoints.back()}});
-  const MergeResult r = Merge(planner, MergeRequest{.paths = inputs});
+  const MergeResult r =
+      Merge(planner, MergeRequest{.paths = inputs, .options = {.report_inputs = true}});
   ASSERT_EQ(r.inputs.size(), 3u);
   EXPECT_FALSE(r.inputs[2].valid);
   EXPECT_EQ(r.inputs[2].invalid_edge, 0);
@@ -210,7 +285,8 @@ TEST_F(MergeTest, SubdividedInputsMergeNoWorseAndNameTheInputsOwnEdges) {
   for (const MeasureSpec& measure : {MeasureSpec{.type = MeasureType::kLength},
                                      MeasureSpec{.type = MeasureType::kInverseClearance, .k = 3}}) {
     SCOPED_TRACE(MeasureTypeName(measure.type));
-    const MergeOptions plain_options{.candidates = {.variant = Variant::kAllPairs}};
+    const MergeOptions plain_options{
+        .candidates = {.variant = Variant::kAllPairs}, .report_inputs = true, .optimize_ms = 0};
     MergeOptions dense_options = plain_options;
     dense_options.max_node_spacing = 3.0;
     const MergeResult plain =
@@ -250,10 +326,58 @@ TEST_F(MergeTest, SubdividedInputsMergeNoWorseAndNameTheInputsOwnEdges) {
   }
 }
 
+TEST_F(MergeTest, PostOptimizationShortensWithCertifiedMotionsAndStreamsEachImprovement) {
+  const LocalPlanner planner = MakePlanner();
+  std::mutex mu;
+  std::vector<double> improvements;
+  MergeRequest request{.paths = CirclePaths()};
+  request.progress = [&](const Progress& p) {
+    std::lock_guard<std::mutex> lock(mu);
+    if (p.phase == "optimize") {
+      EXPECT_FALSE(std::isnan(p.objective));
+      improvements.push_back(p.objective);
+    } else {
+      EXPECT_TRUE(std::isnan(p.objective)) << p.phase;
+    }
+  };
+  const MergeResult r = Merge(planner, request);
+  MergeRequest off = request;
+  off.progress = {};
+  off.options.optimize_ms = 0;
+  const MergeResult plain = Merge(planner, off);
+  EXPECT_DOUBLE_EQ(r.hgraph_objective, plain.objective);
+  EXPECT_DOUBLE_EQ(plain.hgraph_objective, plain.objective);
+  EXPECT_EQ(plain.stats.optimize_rounds, 0);
+  // Circle paths leave room between the discs: shortcuts shorten the H-Graph optimum.
+  EXPECT_LT(r.objective, r.hgraph_objective * (1 - 1e-3));
+  EXPECT_GT(r.stats.shortcuts, 0);
+  ASSERT_FALSE(improvements.empty());
+  for (size_t i = 1; i < improvements.size(); ++i) EXPECT_LT(improvements[i], improvements[i - 1]);
+  EXPECT_LE(r.objective, improvements.back() + 1e-9);
+  EXPECT_TRUE(r.path.waypoints.front().isApprox(CirclePaths()[0].waypoints.front()));
+  EXPECT_TRUE(r.path.waypoints.back().isApprox(CirclePaths()[0].waypoints.back()));
+  // The merged path passes the certified check, as `hgraph check` runs it.
+  const PathCheckResult check = CheckPaths(planner, PathCheckRequest{.paths = {r.path}});
+  ASSERT_EQ(check.paths.size(), 1u);
+  EXPECT_TRUE(check.paths[0].valid);
+  EXPECT_TRUE(check.paths[0].certified);
+  EXPECT_NEAR(check.paths[0].quality.length, r.quality.length, 1e-9 * r.quality.length);
+  // Points the post-optimization made carry no input.
+  bool made = false;
+  for (size_t j = 0; j < r.source_path.size(); ++j) {
+    if (r.source_path[j] < 0) {
+      made = true;
+      EXPECT_EQ(r.source_index[j], -1);
+    }
+  }
+  EXPECT_TRUE(made);
+}
+
 TEST_F(MergeTest, CancelStopsTheMerge) {
   const LocalPlanner planner = MakePlanner();
-  MergeRequest request{.paths = CirclePaths(),
-                       .options = {.candidates = {.variant = Variant::kAllPairs}}};
+  MergeRequest request{
+      .paths = CirclePaths(),
+      .options = {.candidates = {.variant = Variant::kAllPairs}, .evaluation = Evaluation::kEager}};
   request.cancel.Cancel();
   try {
     Merge(planner, request);
@@ -268,7 +392,10 @@ TEST_F(MergeTest, ProgressReachesTheTotal) {
   std::mutex mu;
   std::map<std::string, std::pair<int64_t, int64_t>> last;
   MergeRequest request{.paths = CirclePaths(),
-                       .options = {.candidates = {.variant = Variant::kAllPairs}, .threads = 2}};
+                       .options = {.candidates = {.variant = Variant::kAllPairs},
+                                   .evaluation = Evaluation::kEager,
+                                   .optimize_ms = 0,
+                                   .threads = 2}};
   request.progress = [&](const Progress& p) {
     std::lock_guard<std::mutex> lock(mu);
     auto& entry = last[p.phase];
@@ -300,9 +427,11 @@ namespace {
 TEST_F(MergeTest, StatsAreConsistent) {
   const LocalPlanner planner = MakePlanner();
   for (Variant variant : {Variant::kAllPairs, Variant::kEditDistance}) {
-    const MergeResult r = Merge(
-        planner,
-        MergeRequest{.paths = CirclePaths(), .options = {.candidates = {.variant = variant}}});
+    const MergeResult r =
+        Merge(planner, MergeRequest{.paths = CirclePaths(),
+                                    .options = {.candidates = {.variant = variant},
+                                                .evaluation = Evaluation::kEager,
+                                                .optimize_ms = 0}});
     EXPECT_GE(r.stats.edges_checked, r.stats.input_edges + r.stats.candidate_edges);
     EXPECT_LE(r.stats.edges_valid, r.stats.input_edges + r.stats.candidate_edges);
     // The repeated waypoint of the first OMPL path appears once in the output.

@@ -29,6 +29,11 @@ VARIANTS = {
     "edit-distance-neighborhood": merge_pb2.VARIANT_EDIT_DISTANCE_NEIGHBORHOOD,
 }
 
+EVALUATIONS = {
+    "lazy": merge_pb2.EVALUATION_LAZY,
+    "eager": merge_pb2.EVALUATION_EAGER,
+}
+
 
 class HgraphError(Exception):
     """A failed call: the canonical gRPC code and the server's message (which names the field)."""
@@ -241,6 +246,7 @@ class Client:
               k: Optional[float] = None, safety: Optional[float] = None,
               variant: Optional[str] = None, options: Optional[merge_pb2.MergeOptions] = None,
               max_node_spacing: Optional[float] = None,
+              evaluation: Optional[str] = None, report_inputs: Optional[bool] = None,
               session: Optional[str] = None,
               on_progress: Optional[Callable[[Progress], None]] = None,
               progress_interval_ms: int = 0, seed: int = 0,
@@ -248,7 +254,9 @@ class Client:
         """Merges the paths in the session (default: the current one), streaming progress.
 
         `max_node_spacing` subdivides long input edges in the H-Graph so that bridges can leave
-        an input mid-edge (MergeOptions.max_node_spacing)."""
+        an input mid-edge (MergeOptions.max_node_spacing). `evaluation` is "lazy" (the default:
+        only the edges the search wants are checked) or "eager"; `report_inputs` checks every
+        input edge so that every input report is complete (InputReport.checked)."""
         opts = merge_pb2.MergeOptions()
         if options is not None:
             opts.CopyFrom(options)
@@ -256,6 +264,10 @@ class Client:
             opts.variant = VARIANTS[variant]
         if max_node_spacing is not None:
             opts.max_node_spacing = max_node_spacing
+        if evaluation is not None:
+            opts.evaluation = EVALUATIONS[evaluation]
+        if report_inputs is not None:
+            opts.report_inputs = report_inputs
         request = service_pb2.MergePathsRequest(
             session=session or self.session or "", paths=make_paths(paths),
             measure=make_measure(measure, k, safety), options=opts, seed=seed,
