@@ -199,8 +199,9 @@ void PrintMergeTable(const MergeResult& r) {
     }
   }
   if (unchecked) {
-    std::printf("  * not every edge checked (lazy evaluation): length only; --report-inputs "
-                "checks them all\n");
+    std::printf(
+        "  * not every edge checked (lazy evaluation): length only; --report-inputs "
+        "checks them all\n");
   }
   std::printf("measure %s (%s variant): objective %s", MeasureTypeName(r.measure.type),
               VariantName(r.variant), Cell(r.objective, 0).c_str());

@@ -13,8 +13,8 @@
 #include "core/hgraph/hgraph.h"
 #include "core/measure/measure.h"
 #include "core/merge/path_check.h"
-#include "core/search/search.h"
 #include "core/motion/motion_checker.h"
+#include "core/search/search.h"
 
 namespace hgraph {
 

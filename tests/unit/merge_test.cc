@@ -186,8 +186,7 @@ TEST_P(MergePropertyTest, EveryVariantAndMeasureKeepsTheInvariants) {
       if (variant == Variant::kAllPairs) {
         all_pairs_objective = eager.hgraph_objective;
       } else {
-        EXPECT_LE(all_pairs_objective, eager.hgraph_objective + 1e-9)
-            << "all-pairs is never worse";
+        EXPECT_LE(all_pairs_objective, eager.hgraph_objective + 1e-9) << "all-pairs is never worse";
       }
     }
   }
