@@ -730,13 +730,14 @@ class PathMergerService::PlanCall final : public grpc::ServerWriteReactor<v1::Pl
     LoadedScene scene = service_->scenes_.Get(session.scene(), "session", token_);
     const Scene& model = scene.world->scene();
     PlanRequest plan{.planner = request.planner().empty()
-                                    ? PlannerType::kRRTConnect
+                                    ? PlanRequest().planner
                                     : ParsePlannerType(request.planner(), "planner"),
                      .count = request.count() == 0 ? 1 : request.count(),
                      .time_s = request.time_per_path_s() > 0 ? request.time_per_path_s() : 1.0,
                      .seed = request.seed(),
                      .simplify = request.simplify(),
-                     .resolution = SceneResolution(*scene.proto)};
+                     .resolution = request.has_resolution() ? request.resolution()
+                                                            : SceneResolution(*scene.proto)};
     if (request.has_start()) {
       plan.start = ConfigFromProto(request.start());
     } else if (model.start) {

@@ -5,6 +5,7 @@
 
 #include "client/cli/cli_common.h"
 #include "client/cli/command.h"
+#include "client/cli/remote.h"
 #include "core/adapter/merge_proto.h"
 #include "core/adapter/path_io.h"
 #include "core/adapter/scene_proto.h"
@@ -59,8 +60,13 @@ Subcommand AddCheckCommand(CLI::App& parent) {
                 "Only the collision test at the resolution's samples (faster; may accept an edge "
                 "that grazes an obstacle between two samples, which a merge rejects)");
   auto run_checked = [flags](const PathChecker& checker) { return RunCheck(*flags, checker); };
-  return Subcommand{
-      .app = app, .run = [run_checked] { return run_checked({}); }, .run_checked = run_checked};
+  return Subcommand{.app = app,
+                    .run = [run_checked] { return run_checked({}); },
+                    .run_checked = run_checked,
+                    .run_remote =
+                        [flags, run_checked](const RemoteOptions& remote) {
+                          return run_checked(RemotePathChecker(remote, flags->scene));
+                        }};
 }
 
 }  // namespace hgraph::cli

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <limits>
 
+#include "core/adapter/merge_proto.h"
 #include "core/adapter/scene_proto.h"
 #include "core/hgraph/bridge_candidates.h"
 #include "core/measure/measure.h"
@@ -231,6 +232,22 @@ void PrintMergeTable(const MergeResult& r) {
       "search %.1f, evaluate %.1f, optimize %.1f, total %.1f\n",
       t.validate_ms, t.inputs_ms, t.align_ms, t.candidates_ms, t.check_ms, t.search_ms,
       t.evaluate_ms, t.optimize_ms, t.total_ms);
+}
+
+void MeasureFlags::Add(CLI::App* app) {
+  app->add_option("--measure", measure,
+                  "Quality measure: length, inverse-clearance, bottleneck-clearance, safe-length")
+      ->capture_default_str();
+  k_opt = app->add_option("--k", k, "Inverse-clearance exponent (default 3)");
+  app->add_option("--safety", safety, "Minimum clearance C for safe-length");
+}
+
+v1::Measure MeasureFlags::ToProto() const {
+  v1::Measure proto = MeasureToProto(MeasureSpec{.type = ParseMeasureType(measure, "--measure")});
+  proto.clear_k();
+  if (k_opt->count() > 0) proto.set_k(k);
+  proto.set_safety(safety);
+  return proto;
 }
 
 }  // namespace hgraph::cli

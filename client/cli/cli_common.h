@@ -15,6 +15,7 @@
 #include "core/merge/merge.h"
 #include "core/motion/local_planner.h"
 #include "core/scene/scene.h"
+#include "hgraph/v1/merge.pb.h"
 #include "hgraph/v1/scene.pb.h"
 
 namespace hgraph::cli {
@@ -77,6 +78,19 @@ class ProgressPrinter {
 // The human table of a merge: every input and the merged path under every measure, invalid
 // inputs' first bad edge, the objective against the best input, stats and per-phase timing.
 void PrintMergeTable(const MergeResult& result);
+
+// --measure, --k and --safety, as merge and requery take them. Unset --k leaves measure.k unset
+// (the engine's default).
+struct MeasureFlags {
+  std::string measure = "length";
+  double k = 0;
+  double safety = 0;
+  CLI::Option* k_opt = nullptr;
+
+  void Add(CLI::App* app);
+  // Throws InputError naming the flag.
+  v1::Measure ToProto() const;
+};
 
 // Fixed-width number for tables: "inf" for infinity, "-" for NaN.
 std::string Cell(double v, int width, int precision = 4);

@@ -6,22 +6,34 @@
 #include <CLI/CLI.hpp>
 #include <functional>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "core/merge/path_check.h"
 
 namespace hgraph::cli {
 
-// Exit codes shared by every subcommand.
+// Exit codes shared by every subcommand, the same in process and with --server.
 inline constexpr int kExitOk = 0;
-inline constexpr int kExitCheckFailed = 1;  // the command ran; what it checked is not valid
-inline constexpr int kExitBadInput = 2;     // any hgraph::Error, bad flags, unreadable files
+// The command ran; what it checked is not valid, or it found less than it was asked for.
+inline constexpr int kExitCheckFailed = 1;
+inline constexpr int kExitBadInput = 2;  // any hgraph::Error, bad flags, unreadable files
+// --server: the server could not be reached or failed (UNAVAILABLE, INTERNAL, DEADLINE_EXCEEDED,
+// UNKNOWN, UNIMPLEMENTED, ...), as opposed to rejecting the request (exit 2).
+inline constexpr int kExitServerFailed = 3;
+
+// Flags every remote call takes (--server, --session, --timeout).
+struct RemoteOptions {
+  std::string server;   // HOST:PORT
+  std::string session;  // reuse this session instead of creating one
+  double timeout_s = 0;
+};
 
 // How a subcommand's paths are to be checked (core/merge/path_check.h).
 struct CheckSettings {
   CheckMode mode = CheckMode::kCertified;
   std::optional<double> resolution;  // unset: the scene's, or 0.01
-  double k = 3.0;
+  double k = kDefaultInverseClearanceK;
 };
 
 // A path check and the resolution it ran at.
@@ -43,6 +55,10 @@ struct Subcommand {
   // checker, or in process when it is empty. `run` is this with an empty checker; --server
   // passes the service's.
   std::function<int(const PathChecker&)> run_checked;
+  // The same subcommand through hgraph-server: the same request builder, printout and exit
+  // codes as `run`, with the engine work done by the service (WithServer in remote.h calls it
+  // when --server is given).
+  std::function<int(const RemoteOptions&)> run_remote;
 };
 
 Subcommand AddMergeCommand(CLI::App& parent);

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "client/cli/command.h"
+#include "client/cli/remote.h"
 #include "core/adapter/json_io.h"
 #include "core/adapter/ompl_cfg.h"
 #include "core/adapter/scene_proto.h"
@@ -33,6 +34,23 @@ int RunImportCfg(const ImportCfgFlags& f) {
   return kExitOk;
 }
 
+// The import runs here (and writes --out if given); the scene goes to the server with its meshes
+// as blobs. It goes as the --out file will read back: JSON does not keep every bit of a message
+// (-0 reads back as 0), and a later `--session ... --scene <out>` must find the same digest.
+int RunRemoteImportCfg(const ImportCfgFlags& f, const RemoteOptions& remote) {
+  if (!f.out.empty()) RunImportCfg(f);
+  v1::Scene scene;
+  ParseJson(ToJson(ReadOmplAppProblem(f.cfg)), f.cfg, &scene);
+  RemoteClient client(remote.server, remote.timeout_s, remote.session);
+  const v1::Digest digest =
+      client.UploadScene(std::move(scene), std::filesystem::path(f.cfg).parent_path().string());
+  const std::string session = client.OpenSession(digest, remote.session);
+  std::printf("scene sha256 %s (%lld bytes) stored on %s\n", digest.sha256().c_str(),
+              static_cast<long long>(digest.size_bytes()), remote.server.c_str());
+  std::printf("session %s\n", session.c_str());
+  return kExitOk;
+}
+
 }  // namespace
 
 Subcommand AddImportCfgCommand(CLI::App& parent) {
@@ -44,7 +62,11 @@ Subcommand AddImportCfgCommand(CLI::App& parent) {
   app->add_option("cfg", flags->cfg, "OMPL.app problem file")->required();
   app->add_option("--out", flags->out,
                   "Scene JSON to write (meshes referenced by path); required without --server");
-  return Subcommand{.app = app, .run = [flags] { return RunImportCfg(*flags); }};
+  return Subcommand{
+      .app = app,
+      .run = [flags] { return RunImportCfg(*flags); },
+      .run_remote =
+          [flags](const RemoteOptions& remote) { return RunRemoteImportCfg(*flags, remote); }};
 }
 
 }  // namespace hgraph::cli

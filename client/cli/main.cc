@@ -14,12 +14,9 @@ int main(int argc, char** argv) {
       "hgraph");
   app.require_subcommand(1);
   std::vector<Subcommand> subcommands = {
-      WithServer(AddMergeCommand(app), RemoteKind::kMerge),
-      WithServer(AddCheckCommand(app), RemoteKind::kCheck),
-      WithServer(AddPlanCommand(app), RemoteKind::kPlan),
-      WithServer(AddRenderCommand(app), RemoteKind::kCheck),
-      WithServer(AddImportCfgCommand(app), RemoteKind::kImportCfg),
-      AddRequeryCommand(app),
+      WithServer(AddMergeCommand(app)),     WithServer(AddCheckCommand(app)),
+      WithServer(AddPlanCommand(app)),      WithServer(AddRenderCommand(app)),
+      WithServer(AddImportCfgCommand(app)), AddRequeryCommand(app),
       AddHealthCommand(app),
   };
 
@@ -41,6 +38,9 @@ int main(int argc, char** argv) {
     for (const Subcommand& sub : subcommands) {
       if (sub.app->parsed()) return sub.run();
     }
+  } catch (const ServerFailure& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return kExitServerFailed;
   } catch (const hgraph::Error& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return kExitBadInput;

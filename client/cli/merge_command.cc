@@ -1,10 +1,15 @@
-// `hgraph merge`: merge input paths in process and write the MergeResult JSON.
+// `hgraph merge`: merge input paths, in process or through hgraph-server (--server), and write
+// the MergeResult JSON. One request builder (BuildRequest) and one printout serve both runs.
 #include <cstdio>
+#include <filesystem>
+#include <functional>
 #include <map>
+#include <optional>
 #include <string>
 
 #include "client/cli/cli_common.h"
 #include "client/cli/command.h"
+#include "client/cli/remote.h"
 #include "client/cli/shortcut_step.h"
 #include "core/adapter/json_io.h"
 #include "core/adapter/merge_proto.h"
@@ -25,13 +30,11 @@ struct MergeFlags {
   std::string out_path;
   std::string svg;
   std::string variant = "edit-distance";
-  std::string measure = "length";
+  MeasureFlags measure;
   double radius = 0;
   int phi = 0;
   double gap_init = 0;
   double gap_extend = 0;
-  double k = 0;
-  double safety = 0;
   double resolution = 0;
   double endpoint_tolerance = 0;
   double max_node_spacing = 0;
@@ -47,7 +50,6 @@ struct MergeFlags {
   CLI::Option* phi_opt = nullptr;
   CLI::Option* gap_init_opt = nullptr;
   CLI::Option* gap_extend_opt = nullptr;
-  CLI::Option* k_opt = nullptr;
   CLI::Option* resolution_opt = nullptr;
   CLI::Option* endpoint_tolerance_opt = nullptr;
   CLI::Option* max_node_spacing_opt = nullptr;
@@ -72,66 +74,121 @@ const std::map<std::string, std::string>& FlagNames() {
   return names;
 }
 
-// Builds the request messages the service would receive, so the CLI and the service share one
-// validation path (core/adapter).
-void BuildProtos(const MergeFlags& f, v1::Measure* measure, v1::MergeOptions* options) {
-  *measure = MeasureToProto(MeasureSpec{.type = ParseMeasureType(f.measure, "--measure")});
-  measure->clear_k();
-  if (f.k_opt->count() > 0) measure->set_k(f.k);
-  measure->set_safety(f.safety);
-  options->set_variant(VariantToProto(ParseVariant(f.variant, "--variant")));
-  if (f.radius_opt->count() > 0) options->set_radius(f.radius);
-  if (f.phi_opt->count() > 0) options->set_phi(f.phi);
-  if (f.gap_init_opt->count() > 0) options->set_gap_init(f.gap_init);
-  if (f.gap_extend_opt->count() > 0) options->set_gap_extend(f.gap_extend);
-  if (f.resolution_opt->count() > 0) options->set_resolution(f.resolution);
-  if (f.endpoint_tolerance_opt->count() > 0) options->set_endpoint_tolerance(f.endpoint_tolerance);
-  if (f.max_node_spacing_opt->count() > 0) options->set_max_node_spacing(f.max_node_spacing);
-  options->set_evaluation(ParseEvaluation(f.evaluation, "--evaluation") == Evaluation::kEager
-                              ? v1::EVALUATION_EAGER
-                              : v1::EVALUATION_LAZY);
-  options->set_report_inputs(f.report_inputs);
-  if (f.optimize_ms_opt->count() > 0) options->set_optimize_ms(f.optimize_ms);
-  options->set_threads(f.threads);
-}
-
-int RunMerge(const MergeFlags& f) {
-  v1::Measure measure_proto;
-  v1::MergeOptions options_proto;
-  MergeRequest request;
-  double resolution = 0;
-  v1::Scene scene_proto = ReadSceneFile(f.scene);
+// The request the service receives (without its session), validated here as the service
+// validates it (core/adapter), so that a bad flag is reported the same way in both runs.
+v1::MergePathsRequest BuildRequest(const MergeFlags& f, const v1::Scene& scene,
+                                   const std::vector<InputPath>& paths, double* resolution) {
+  v1::MergePathsRequest request;
+  *request.mutable_paths() = PathsToProto(paths);
   try {
-    BuildProtos(f, &measure_proto, &options_proto);
-    request.measure = MeasureFromProto(measure_proto);
-    request.options = MergeOptionsFromProto(options_proto);
-    resolution = ResolutionFromProto(options_proto, scene_proto);
+    *request.mutable_measure() = f.measure.ToProto();
+    v1::MergeOptions* options = request.mutable_options();
+    options->set_variant(VariantToProto(ParseVariant(f.variant, "--variant")));
+    if (f.radius_opt->count() > 0) options->set_radius(f.radius);
+    if (f.phi_opt->count() > 0) options->set_phi(f.phi);
+    if (f.gap_init_opt->count() > 0) options->set_gap_init(f.gap_init);
+    if (f.gap_extend_opt->count() > 0) options->set_gap_extend(f.gap_extend);
+    if (f.resolution_opt->count() > 0) options->set_resolution(f.resolution);
+    if (f.endpoint_tolerance_opt->count() > 0) {
+      options->set_endpoint_tolerance(f.endpoint_tolerance);
+    }
+    if (f.max_node_spacing_opt->count() > 0) options->set_max_node_spacing(f.max_node_spacing);
+    options->set_evaluation(ParseEvaluation(f.evaluation, "--evaluation") == Evaluation::kEager
+                                ? v1::EVALUATION_EAGER
+                                : v1::EVALUATION_LAZY);
+    options->set_report_inputs(f.report_inputs);
+    if (f.optimize_ms_opt->count() > 0) options->set_optimize_ms(f.optimize_ms);
+    options->set_threads(f.threads);
+    MeasureFromProto(request.measure());
+    MergeOptionsFromProto(*options);
+    *resolution = ResolutionFromProto(*options, scene);
   } catch (const Error& e) {
     RethrowWithFlag(e, FlagNames());
   }
+  return request;
+}
 
-  const LoadedScene loaded = LoadScene(std::move(scene_proto), f.scene, resolution);
-  request.paths = LoadPathsFile(f.paths, loaded.scene->space);
+// What a merge run returns, wherever it ran.
+struct MergeRun {
+  v1::MergeResult result;
+  std::string hgraph;  // with --server: the stored H-Graph's name, for `hgraph requery`
+};
 
+// Runs the request; `scene` is loaded on demand (in process: always, for the merge itself).
+using MergeRunner =
+    std::function<MergeRun(const v1::MergePathsRequest& request, const ProgressCallback& progress)>;
+
+int RunMerge(const MergeFlags& f, const MergeRunner& run, std::optional<LoadedScene>* loaded,
+             double resolution, const v1::Scene& scene_proto, const std::vector<InputPath>& paths,
+             const v1::MergePathsRequest& request) {
   ProgressPrinter printer(!f.quiet);
-  request.progress = printer.callback();
-  const MergeResult result = Merge(*loaded.planner, request);
+  const MergeRun response = run(request, printer.callback());
   printer.Finish();
 
-  if (!f.out.empty()) WriteTextFile(f.out, ToJson(MergeResultToProto(result)));
-  ShortcutStep shortcut;
+  if (!f.out.empty()) WriteTextFile(f.out, ToJson(response.result));
+  // --shortcut and --svg need the scene, which this side holds: they run here, on the result.
+  const MergeResult result = MergeResultFromProto(response.result);
+  auto scene = [&]() -> const LoadedScene& {
+    if (!*loaded) loaded->emplace(LoadScene(scene_proto, f.scene, resolution));
+    return **loaded;
+  };
+  ShortcutStep step;
   if (f.shortcut) {
-    shortcut =
-        ShortcutMergedPath(*loaded.planner, result, request.measure, resolution, f.shortcut_seed);
+    step =
+        ShortcutMergedPath(*scene().planner, result, result.measure, resolution, f.shortcut_seed);
   }
-  if (!f.out_path.empty()) WritePathsFile(f.out_path, {f.shortcut ? shortcut.path : result.path});
+  if (!f.out_path.empty()) WritePathsFile(f.out_path, {f.shortcut ? step.path : result.path});
   if (!f.svg.empty()) {
-    WriteTextFile(f.svg, RenderSvg(*loaded.scene, MergePicture(request.paths, result,
-                                                               f.shortcut ? &shortcut : nullptr)));
+    WriteTextFile(f.svg, RenderSvg(*scene().scene,
+                                   MergePicture(paths, result, f.shortcut ? &step : nullptr)));
   }
   PrintMergeTable(result);
-  if (f.shortcut) PrintShortcutRow(shortcut, result);
+  if (!response.hgraph.empty()) std::printf("hgraph %s\n", response.hgraph.c_str());
+  if (f.shortcut) PrintShortcutRow(step, result);
   return kExitOk;
+}
+
+int RunLocal(const MergeFlags& f) {
+  const v1::Scene scene_proto = ReadSceneFile(f.scene);
+  double resolution = 0;
+  const Space space = SpaceFromProto(scene_proto.space(), "scene.space");
+  const std::vector<InputPath> paths = LoadPathsFile(f.paths, space);
+  const v1::MergePathsRequest request = BuildRequest(f, scene_proto, paths, &resolution);
+  std::optional<LoadedScene> loaded;
+  loaded.emplace(LoadScene(scene_proto, f.scene, resolution));
+  const MergeRunner run = [&](const v1::MergePathsRequest& r, const ProgressCallback& progress) {
+    MergeRequest merge{.paths = paths,
+                       .measure = MeasureFromProto(r.measure()),
+                       .options = MergeOptionsFromProto(r.options()),
+                       .progress = progress};
+    return MergeRun{.result = MergeResultToProto(Merge(*loaded->planner, merge))};
+  };
+  return RunMerge(f, run, &loaded, resolution, scene_proto, paths, request);
+}
+
+int RunRemote(const MergeFlags& f, const RemoteOptions& remote) {
+  RemoteClient client(remote.server, remote.timeout_s, remote.session);
+  const v1::Scene scene_proto = ReadSceneFile(f.scene);
+  double resolution = 0;
+  const Space space = SpaceFromProto(scene_proto.space(), "scene.space");
+  const std::vector<InputPath> paths = LoadPathsFile(f.paths, space);
+  v1::MergePathsRequest request = BuildRequest(f, scene_proto, paths, &resolution);
+  v1::Scene uploaded;
+  request.set_session(OpenSceneFile(client, f.scene, remote, &uploaded));
+  const MergeRunner run = [&](const v1::MergePathsRequest& r, const ProgressCallback& progress) {
+    v1::MergePathsResponse response = client.Merge(r, [&](const v1::MergeProgress& p) {
+      if (!progress) return;  // --quiet
+      progress(Progress{.phase = p.phase(),
+                        .done = p.done(),
+                        .total = p.total(),
+                        .collision_checks = p.collision_checks(),
+                        .distance_queries = p.distance_queries(),
+                        .elapsed_ms = p.elapsed_ms()});
+    });
+    return MergeRun{.result = std::move(*response.mutable_result()), .hgraph = response.hgraph()};
+  };
+  std::optional<LoadedScene> loaded;
+  return RunMerge(f, run, &loaded, resolution, scene_proto, paths, request);
 }
 
 }  // namespace
@@ -140,7 +197,9 @@ Subcommand AddMergeCommand(CLI::App& parent) {
   auto flags = std::make_shared<MergeFlags>();
   MergeFlags& f = *flags;
   CLI::App* app = parent.add_subcommand(
-      "merge", "Merge input paths into one path of higher quality (in process).");
+      "merge",
+      "Merge input paths into one path of higher quality (in process, or with --server "
+      "through hgraph-server).");
   app->add_option("--scene", f.scene, "Scene JSON (hgraph.v1.Scene)")->required();
   app->add_option("--paths", f.paths,
                   "Input paths: PathSet JSON, or OMPL text (one configuration per line, blank "
@@ -162,11 +221,7 @@ Subcommand AddMergeCommand(CLI::App& parent) {
   f.gap_extend_opt = app->add_option("--gap-extend", f.gap_extend,
                                      "Alignment gap extension penalty (default: mean input edge "
                                      "length)");
-  app->add_option("--measure", f.measure,
-                  "Quality measure: length, inverse-clearance, bottleneck-clearance, safe-length")
-      ->capture_default_str();
-  f.k_opt = app->add_option("--k", f.k, "Inverse-clearance exponent (default 3)");
-  app->add_option("--safety", f.safety, "Minimum clearance C for safe-length");
+  f.measure.Add(app);
   f.resolution_opt = app->add_option(
       "--resolution", f.resolution,
       "Local-planner resolution, fraction of the space's extent (default: the scene's, or 0.01)");
@@ -196,7 +251,10 @@ Subcommand AddMergeCommand(CLI::App& parent) {
                 "result. With --server the shortcutting runs here, on the local scene");
   app->add_option("--shortcut-seed", f.shortcut_seed, "Seed of the shortcutting")
       ->capture_default_str();
-  return Subcommand{.app = app, .run = [flags] { return RunMerge(*flags); }};
+  return Subcommand{
+      .app = app,
+      .run = [flags] { return RunLocal(*flags); },
+      .run_remote = [flags](const RemoteOptions& remote) { return RunRemote(*flags, remote); }};
 }
 
 }  // namespace hgraph::cli

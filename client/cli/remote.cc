@@ -52,11 +52,30 @@ const char* CodeName(grpc::StatusCode code) {
   }
 }
 
+// True for the codes that say the request was judged and rejected (exit 2); every other code
+// means the server was unreachable or failed (exit 3).
+bool RejectsRequest(grpc::StatusCode code) {
+  switch (code) {
+    case grpc::StatusCode::INVALID_ARGUMENT:
+    case grpc::StatusCode::NOT_FOUND:
+    case grpc::StatusCode::RESOURCE_EXHAUSTED:
+    case grpc::StatusCode::FAILED_PRECONDITION:
+    case grpc::StatusCode::OUT_OF_RANGE:
+    case grpc::StatusCode::ALREADY_EXISTS:
+    case grpc::StatusCode::PERMISSION_DENIED:
+    case grpc::StatusCode::UNAUTHENTICATED: return true;
+    default: return false;
+  }
+}
+
 void Check(const grpc::Status& status, const char* method) {
   if (status.ok()) return;
-  throw Error(FromGrpc(status.error_code()), "",
-              std::string(CodeName(status.error_code())) + " from " + method + ": " +
-                  status.error_message());
+  const std::string message = std::string(CodeName(status.error_code())) + " from " + method +
+                              ": " + status.error_message();
+  if (!RejectsRequest(status.error_code())) {
+    throw ServerFailure(FromGrpc(status.error_code()), "", message);
+  }
+  throw Error(FromGrpc(status.error_code()), "", message);
 }
 
 v1::Digest DigestOf(const std::string& bytes) {
@@ -94,7 +113,10 @@ v1::Digest RemoteClient::UploadScene(v1::Scene scene, const std::string& base_di
     std::filesystem::path file = mesh->path();
     if (file.is_relative() && !base_dir.empty()) file = std::filesystem::path(base_dir) / file;
     std::string bytes = ReadTextFile(file.string());
-    if (mesh->format().empty()) mesh->set_format(file.extension().string().substr(1));
+    // No extension: the format stays unset and the server names the mesh in its error.
+    if (mesh->format().empty() && file.has_extension()) {
+      mesh->set_format(file.extension().string().substr(1));
+    }
     const v1::Digest digest = DigestOf(bytes);
     *mesh->mutable_digest() = digest;
     if (blobs.emplace(digest.sha256(), std::move(bytes)).second) *find.add_digests() = digest;
@@ -201,40 +223,12 @@ void RemoteClient::Plan(const v1::PlanPathsRequest& request,
   Check(reader->Finish(), "PlanPaths");
 }
 
-namespace {
-
-// Reads a flag of the wrapped subcommand by name (the in-process command owns its flags).
-template <class T>
-T Flag(CLI::App* app, const std::string& name, T fallback) {
-  CLI::Option* option = app->get_option_no_throw(name);
-  if (option == nullptr || option->count() == 0) return fallback;
-  return option->as<T>();
-}
-bool Given(CLI::App* app, const std::string& name) {
-  CLI::Option* option = app->get_option_no_throw(name);
-  return option != nullptr && option->count() > 0;
-}
-
-}  // namespace
-
 // The same table as the in-process merge, from the proto result.
 void PrintRemoteResult(const v1::MergeResult& r, const std::string& hgraph) {
   PrintMergeTable(MergeResultFromProto(r));
   if (!hgraph.empty()) std::printf("hgraph %s\n", hgraph.c_str());
 }
 
-v1::Measure MeasureFromFlags(CLI::App* app) {
-  const std::string name = Flag<std::string>(app, "--measure", "length");
-  v1::Measure measure = MeasureToProto(MeasureSpec{.type = ParseMeasureType(name, "--measure")});
-  measure.clear_k();
-  if (Given(app, "--k")) measure.set_k(Flag<double>(app, "--k", 3));
-  measure.set_safety(Flag<double>(app, "--safety", 0));
-  return measure;
-}
-
-namespace {
-
-// Uploads the scene file and opens the session; returns the session name and the scene.
 std::string OpenSceneFile(RemoteClient& client, const std::string& scene_file,
                           const RemoteOptions& remote, v1::Scene* scene_out) {
   v1::Scene scene = ReadSceneFile(scene_file);
@@ -246,13 +240,7 @@ std::string OpenSceneFile(RemoteClient& client, const std::string& scene_file,
   return session;
 }
 
-std::string OpenScene(RemoteClient& client, CLI::App* app, const RemoteOptions& remote,
-                      v1::Scene* scene_out) {
-  return OpenSceneFile(client, Flag<std::string>(app, "--scene", ""), remote, scene_out);
-}
-
-// CheckPaths as a PathChecker: the scene is uploaded and the session opened on the first check.
-PathChecker RemotePathChecker(CLI::App* app, const RemoteOptions& remote) {
+PathChecker RemotePathChecker(const RemoteOptions& remote, const std::string& scene_file) {
   struct State {
     explicit State(const RemoteOptions& remote)
         : client(remote.server, remote.timeout_s, remote.session) {}
@@ -260,10 +248,11 @@ PathChecker RemotePathChecker(CLI::App* app, const RemoteOptions& remote) {
     std::string session;
   };
   auto state = std::make_shared<State>(remote);
-  return [state, app, remote](const std::vector<InputPath>& paths, const CheckSettings& settings) {
+  return [state, remote, scene_file](const std::vector<InputPath>& paths,
+                                     const CheckSettings& settings) {
     if (state->session.empty()) {
       v1::Scene scene;
-      state->session = OpenScene(state->client, app, remote, &scene);
+      state->session = OpenSceneFile(state->client, scene_file, remote, &scene);
     }
     v1::CheckPathsRequest request;
     request.set_session(state->session);
@@ -283,153 +272,8 @@ PathChecker RemotePathChecker(CLI::App* app, const RemoteOptions& remote) {
   };
 }
 
-int RunRemoteMerge(CLI::App* app, const RemoteOptions& remote) {
-  RemoteClient client(remote.server, remote.timeout_s, remote.session);
-  v1::Scene scene;
-  const std::string scene_file = Flag<std::string>(app, "--scene", "");
-  const std::string session = OpenSceneFile(client, scene_file, remote, &scene);
-
-  v1::MergePathsRequest request;
-  request.set_session(session);
-  const Space space = SpaceFromProto(scene.space(), "scene.space");
-  const std::vector<InputPath> paths = LoadPathsFile(Flag<std::string>(app, "--paths", ""), space);
-  *request.mutable_paths() = PathsToProto(paths);
-  double resolution = 0;
-  try {
-    *request.mutable_measure() = MeasureFromFlags(app);
-    v1::MergeOptions* options = request.mutable_options();
-    options->set_variant(VariantToProto(
-        ParseVariant(Flag<std::string>(app, "--variant", "edit-distance"), "--variant")));
-    if (Given(app, "--radius")) options->set_radius(Flag<double>(app, "--radius", 0));
-    if (Given(app, "--phi")) options->set_phi(Flag<int>(app, "--phi", 5));
-    if (Given(app, "--gap-init")) options->set_gap_init(Flag<double>(app, "--gap-init", 0));
-    if (Given(app, "--gap-extend")) options->set_gap_extend(Flag<double>(app, "--gap-extend", 0));
-    if (Given(app, "--resolution")) options->set_resolution(Flag<double>(app, "--resolution", 0));
-    if (Given(app, "--endpoint-tolerance")) {
-      options->set_endpoint_tolerance(Flag<double>(app, "--endpoint-tolerance", 0));
-    }
-    if (Given(app, "--max-node-spacing")) {
-      options->set_max_node_spacing(Flag<double>(app, "--max-node-spacing", 0));
-    }
-    options->set_evaluation(ParseEvaluation(Flag<std::string>(app, "--evaluation", "lazy"),
-                                            "--evaluation") == Evaluation::kEager
-                                ? v1::EVALUATION_EAGER
-                                : v1::EVALUATION_LAZY);
-    options->set_report_inputs(Flag<bool>(app, "--report-inputs", false));
-    if (Given(app, "--optimize-ms"))
-      options->set_optimize_ms(Flag<double>(app, "--optimize-ms", 0));
-    options->set_threads(Flag<int>(app, "--threads", 0));
-    // The resolution the server will use, for --shortcut here.
-    resolution = ResolutionFromProto(*options, scene);
-  } catch (const Error& e) {
-    RethrowWithFlag(e, {{"measure.k", "--k"},
-                        {"measure.safety", "--safety"},
-                        {"options.resolution", "--resolution"}});
-  }
-
-  ProgressPrinter printer(!Flag<bool>(app, "--quiet", false));
-  const ProgressCallback report = printer.callback();
-  const v1::MergePathsResponse response = client.Merge(request, [&](const v1::MergeProgress& p) {
-    if (!report) return;  // --quiet
-    report(Progress{.phase = p.phase(),
-                    .done = p.done(),
-                    .total = p.total(),
-                    .collision_checks = p.collision_checks(),
-                    .distance_queries = p.distance_queries(),
-                    .elapsed_ms = p.elapsed_ms()});
-  });
-  printer.Finish();
-
-  const std::string out = Flag<std::string>(app, "--out", "");
-  if (!out.empty()) WriteTextFile(out, ToJson(response.result()));
-  // --shortcut and --svg need the scene, which this side holds: they run here, on the result.
-  const MergeResult result = MergeResultFromProto(response.result());
-  const bool shortcut = Flag<bool>(app, "--shortcut", false);
-  const std::string svg = Flag<std::string>(app, "--svg", "");
-  std::optional<LoadedScene> loaded;
-  ShortcutStep step;
-  if (shortcut) {
-    loaded.emplace(LoadScene(scene, scene_file, resolution));
-    step = ShortcutMergedPath(*loaded->planner, result, result.measure, resolution,
-                              Flag<uint64_t>(app, "--shortcut-seed", 1));
-  }
-  const std::string out_path = Flag<std::string>(app, "--out-path", "");
-  if (!out_path.empty()) WritePathsFile(out_path, {shortcut ? step.path : result.path});
-  if (!svg.empty()) {
-    const std::shared_ptr<const Scene> drawn =
-        loaded ? loaded->scene
-               : SceneFromProto(scene, std::filesystem::path(scene_file).parent_path().string(),
-                                BlobResolver());
-    WriteTextFile(svg, RenderSvg(*drawn, MergePicture(paths, result, shortcut ? &step : nullptr)));
-  }
-  PrintRemoteResult(response.result(), response.hgraph());
-  if (shortcut) PrintShortcutRow(step, result);
-  return kExitOk;
-}
-
-int RunRemotePlan(CLI::App* app, const RemoteOptions& remote) {
-  RemoteClient client(remote.server, remote.timeout_s, remote.session);
-  v1::Scene scene;
-  v1::PlanPathsRequest request;
-  request.set_session(OpenScene(client, app, remote, &scene));
-  request.set_planner(Flag<std::string>(app, "--planner", ""));
-  request.set_count(Flag<int>(app, "--count", 1));
-  request.set_time_per_path_s(Flag<double>(app, "--time", 0));
-  request.set_seed(Flag<uint64_t>(app, "--seed", 1));
-  request.set_simplify(Flag<bool>(app, "--simplify", false));
-  // Progress: a bar on a terminal, a line per path otherwise (stderr), as for a merge.
-  ProgressPrinter printer(!Flag<bool>(app, "--quiet", false));
-  const ProgressCallback report = printer.callback();
-  const auto started = std::chrono::steady_clock::now();
-  const auto progress = [&](int64_t done) {
-    if (!report) return;
-    report(Progress{.phase = "plan",
-                    .done = done,
-                    .total = request.count(),
-                    .elapsed_ms = std::chrono::duration<double, std::milli>(
-                                      std::chrono::steady_clock::now() - started)
-                                      .count()});
-  };
-  progress(0);
-  std::vector<InputPath> paths;
-  client.Plan(request, [&](const v1::PlanPathsResponse& event) {
-    v1::PathSet one;
-    *one.add_paths() = event.path();
-    paths.push_back(PathsFromProto(one).front());
-    progress(static_cast<int64_t>(paths.size()));
-    printer.Finish();
-    std::printf("%s: %d waypoints, %.1f ms\n", event.path().name().c_str(),
-                event.path().waypoints_size(), event.elapsed_ms());
-    std::fflush(stdout);
-  });
-  printer.Finish();
-  const std::string out = Flag<std::string>(app, "--out", "");
-  if (!out.empty()) WritePathsFile(out, paths);
-  std::printf("%zu paths planned\n", paths.size());
-  return kExitOk;
-}
-
-// The import ran here (and wrote --out if given); the scene goes to the server with its meshes
-// as blobs. It goes as the --out file will read back: JSON does not keep every bit of a message
-// (-0 reads back as 0), and a later `--session ... --scene <out>` must find the same digest.
-int RunRemoteImportCfg(CLI::App* app, const RemoteOptions& remote) {
-  const std::string cfg = Flag<std::string>(app, "cfg", "");
-  v1::Scene scene;
-  ParseJson(ToJson(ReadOmplAppProblem(cfg)), cfg, &scene);
-  RemoteClient client(remote.server, remote.timeout_s, remote.session);
-  const v1::Digest digest =
-      client.UploadScene(std::move(scene), std::filesystem::path(cfg).parent_path().string());
-  const std::string session = client.OpenSession(digest, remote.session);
-  std::printf("scene sha256 %s (%lld bytes) stored on %s\n", digest.sha256().c_str(),
-              static_cast<long long>(digest.size_bytes()), remote.server.c_str());
-  std::printf("session %s\n", session.c_str());
-  return kExitOk;
-}
-
-}  // namespace
-
-Subcommand WithServer(Subcommand local, RemoteKind kind) {
-  HGRAPH_CHECK(kind != RemoteKind::kCheck || local.run_checked);
+Subcommand WithServer(Subcommand local) {
+  HGRAPH_CHECK(local.run_remote);
   auto remote = std::make_shared<RemoteOptions>();
   CLI::App* app = local.app;
   app->add_option("--server", remote->server,
@@ -438,18 +282,9 @@ Subcommand WithServer(Subcommand local, RemoteKind kind) {
                   "With --server: reuse this session (sessions/<id>) instead of creating one");
   app->add_option("--timeout", remote->timeout_s, "With --server: deadline per call, seconds");
   auto run_local = std::move(local.run);
-  auto run_checked = local.run_checked;
-  local.run = [app, kind, remote, run_local, run_checked] {
-    if (remote->server.empty()) return run_local();
-    switch (kind) {
-      case RemoteKind::kMerge: return RunRemoteMerge(app, *remote);
-      case RemoteKind::kPlan: return RunRemotePlan(app, *remote);
-      case RemoteKind::kCheck: return run_checked(RemotePathChecker(app, *remote));
-      case RemoteKind::kImportCfg:
-        if (Given(app, "--out")) run_local();
-        return RunRemoteImportCfg(app, *remote);
-    }
-    return kExitBadInput;
+  auto run_remote = local.run_remote;
+  local.run = [remote, run_local, run_remote] {
+    return remote->server.empty() ? run_local() : run_remote(*remote);
   };
   return local;
 }

@@ -12,6 +12,7 @@
 #include <string>
 
 #include "client/cli/command.h"
+#include "core/common/error.h"
 #include "hgraph/v1/service.grpc.pb.h"
 
 namespace hgraph::cli {
@@ -55,30 +56,29 @@ class RemoteClient {
   std::string session_;
 };
 
-// What --server does for a subcommand.
-enum class RemoteKind {
-  kMerge,      // MergePaths (streamed progress); --svg and --shortcut run here on the result
-  kPlan,       // PlanPaths (one progress line per path)
-  kCheck,      // the subcommand's run_checked with CheckPaths as its checker
-  kImportCfg,  // the local import (if --out is given), then the scene stored and a session opened
+// A failed call the server is to blame for, or that never reached it (UNAVAILABLE, INTERNAL,
+// DEADLINE_EXCEEDED, UNKNOWN, UNIMPLEMENTED, ...): main() exits kExitServerFailed for it.
+class ServerFailure : public Error {
+ public:
+  using Error::Error;
 };
 
-// Adds --server, --session and --timeout to `local`'s app; with --server set, its run goes
-// through the service (reading the subcommand's own flags by name), else runs in process.
-// kCheck requires local.run_checked.
-Subcommand WithServer(Subcommand local, RemoteKind kind);
+// Adds --server, --session and --timeout to `local`'s app; with --server set, its run is
+// local.run_remote (which it requires), else the in-process run.
+Subcommand WithServer(Subcommand local);
 
-// Flags every remote call takes.
-struct RemoteOptions {
-  std::string server;   // HOST:PORT
-  std::string session;  // reuse this session instead of creating one
-  double timeout_s = 0;
-};
+// Uploads the scene file (meshes relative to its folder) and opens remote.session or a new
+// session on it; prints "session <name>" on stderr and returns the name. *scene_out gets the
+// scene as read.
+std::string OpenSceneFile(RemoteClient& client, const std::string& scene_file,
+                          const RemoteOptions& remote, v1::Scene* scene_out);
+
+// CheckPaths as a PathChecker: the scene file is uploaded and the session opened on the first
+// check.
+PathChecker RemotePathChecker(const RemoteOptions& remote, const std::string& scene_file);
 
 // The merge table of the in-process `merge`, from a proto result, then "hgraph <name>".
 void PrintRemoteResult(const v1::MergeResult& result, const std::string& hgraph);
-// The measure from the subcommand's --measure, --k and --safety flags.
-v1::Measure MeasureFromFlags(CLI::App* app);
 
 // `hgraph requery --server HOST:PORT --hgraph NAME --measure M`.
 Subcommand AddRequeryCommand(CLI::App& parent);

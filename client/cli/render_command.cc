@@ -7,6 +7,7 @@
 
 #include "client/cli/cli_common.h"
 #include "client/cli/command.h"
+#include "client/cli/remote.h"
 #include "core/adapter/json_io.h"
 #include "core/adapter/merge_proto.h"
 #include "core/adapter/path_io.h"
@@ -122,8 +123,13 @@ Subcommand AddRenderCommand(CLI::App& parent) {
       ->capture_default_str();
   app->add_option("--width", f.width, "Picture width in pixels")->capture_default_str();
   auto run_checked = [flags](const PathChecker& checker) { return RunRender(*flags, checker); };
-  return Subcommand{
-      .app = app, .run = [run_checked] { return run_checked({}); }, .run_checked = run_checked};
+  return Subcommand{.app = app,
+                    .run = [run_checked] { return run_checked({}); },
+                    .run_checked = run_checked,
+                    .run_remote =
+                        [flags, run_checked](const RemoteOptions& remote) {
+                          return run_checked(RemotePathChecker(remote, flags->scene));
+                        }};
 }
 
 }  // namespace hgraph::cli

@@ -21,22 +21,18 @@ Subcommand AddRequeryCommand(CLI::App& parent) {
   app->add_option("--server", flags->server, "hgraph-server at HOST:PORT")->required();
   app->add_option("--hgraph", *hgraph, "H-Graph name from a merge (sessions/<id>/hgraphs/<n>)")
       ->required();
-  app->add_option("--measure",
-                  "Measure: length, inverse-clearance, bottleneck-clearance, "
-                  "safe-length")
-      ->default_val("length");
-  app->add_option("--k", "Inverse-clearance exponent (default 3)");
-  app->add_option("--safety", "Minimum clearance C for safe-length");
+  auto measure = std::make_shared<MeasureFlags>();
+  measure->Add(app);
   app->add_option("--out", *out, "Write the MergeResult JSON here");
   app->add_option("--timeout", flags->timeout_s, "Deadline, seconds");
-  return Subcommand{app, [app, flags, hgraph, out] {
+  return Subcommand{app, [measure, flags, hgraph, out] {
                       // The H-Graph's session names the replica that holds it.
                       RemoteClient client(flags->server, flags->timeout_s,
                                           hgraph->substr(0, hgraph->find("/hgraphs/")));
                       v1::RequeryRequest request;
                       request.set_hgraph(*hgraph);
                       try {
-                        *request.mutable_measure() = MeasureFromFlags(app);
+                        *request.mutable_measure() = measure->ToProto();
                       } catch (const Error& e) {
                         RethrowWithFlag(e, {{"measure.k", "--k"}, {"measure.safety", "--safety"}});
                       }

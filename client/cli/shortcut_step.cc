@@ -42,7 +42,14 @@ void PrintShortcutRow(const ShortcutStep& step, const MergeResult& result) {
 
 RenderRequest MergePicture(const std::vector<InputPath>& inputs, const MergeResult& result,
                            const ShortcutStep* shortcut) {
-  RenderRequest picture = MergeRenderRequest(inputs, result);
+  RenderRequest picture;
+  for (size_t i = 0; i < inputs.size(); ++i) {
+    RenderPath path{.path = inputs[i]};
+    if (i < result.inputs.size()) path.quality = result.inputs[i].quality;
+    picture.inputs.push_back(std::move(path));
+  }
+  picture.merged = RenderPath{.path = result.path, .quality = result.quality};
+  if (picture.merged->path.name.empty()) picture.merged->path.name = "merged";
   if (shortcut != nullptr) {
     picture.merged = RenderPath{.path = shortcut->path, .quality = shortcut->quality};
     picture.merged->path.name = "merged + shortcut";

@@ -4,7 +4,7 @@
 #include <string>
 #include <vector>
 
-#include "core/hgraph/hgraph.h"
+#include "core/path/path.h"
 #include "core/space/space.h"
 #include "hgraph/v1/path.pb.h"
 

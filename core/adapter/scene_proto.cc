@@ -12,13 +12,12 @@
 #include "core/adapter/ompl_cfg.h"
 #include "core/common/error.h"
 #include "core/common/limits.h"
+#include "core/motion/motion_checker.h"
 #include "core/scene/mesh_loader.h"
 
 namespace hgraph {
 namespace {
 
-constexpr double kQuaternionTolerance = 1e-3;
-constexpr double kDefaultResolution = 0.01;
 
 std::string Index(const std::string& field, int i) { return field + "[" + std::to_string(i) + "]"; }
 

@@ -10,15 +10,10 @@
 #include <vector>
 
 #include "core/motion/motion_checker.h"
+#include "core/path/path.h"
 #include "core/space/space.h"
 
 namespace hgraph {
-
-// A discrete input path. Plain struct; copyable.
-struct InputPath {
-  std::string name;
-  std::vector<Config> waypoints;
-};
 
 // A node: a configuration and where it came from. The shared start and goal come from path 0.
 // A node added by subdivision lies on the input edge (index, index + 1) at fraction t in (0, 1);

@@ -11,6 +11,9 @@
 
 namespace hgraph {
 
+// Default exponent k of the integrated inverse clearance (every measure spec, report and flag).
+inline constexpr double kDefaultInverseClearanceK = 3.0;
+
 enum class MeasureType {
   kLength,               // path length L
   kInverseClearance,     // integral of cl^-k ds (k = 0 is length)
@@ -25,7 +28,7 @@ MeasureType ParseMeasureType(const std::string& name, const std::string& field);
 
 struct MeasureSpec {
   MeasureType type = MeasureType::kLength;
-  double k = 3.0;       // inverse clearance exponent, >= 0
+  double k = kDefaultInverseClearanceK;       // inverse clearance exponent, >= 0
   double safety = 0.0;  // safe-length minimum clearance C, >= 0
 };
 
@@ -40,7 +43,7 @@ struct PathQuality {
   double min_clearance = std::numeric_limits<double>::infinity();
   double avg_clearance = 0;      // integral of cl ds / length (clearance at the point if length 0)
   double inverse_clearance = 0;  // integral of cl^-k ds with the requested k
-  double k = 3.0;
+  double k = kDefaultInverseClearanceK;
   bool has_clearance = false;
 };
 

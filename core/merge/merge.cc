@@ -221,8 +221,10 @@ void HybridizationSession::CheckEdges(const std::vector<int>& edge_ids, bool nee
                           edge.report = checker_->CheckEdge(
                               EdgeCheckRequest{.from = &graph_.node(edge.u).q,
                                                .to = &graph_.node(edge.v).q,
-                                               .need_clearance = need_clearance || edge.input,
-                                               .known_valid = previous.state == EdgeState::kValid});
+                                               .mode = !(need_clearance || edge.input) ? EdgeCheckMode::kSampled
+                                                       : previous.state == EdgeState::kValid
+                                                           ? EdgeCheckMode::kClearanceOfValid
+                                                           : EdgeCheckMode::kClearance});
                           // A re-check for clearance keeps counting what the first check cost.
                           if (previous.state != EdgeState::kUnchecked) {
                             edge.report.collision_checks += previous.collision_checks;

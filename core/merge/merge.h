@@ -12,6 +12,7 @@
 #include "core/hgraph/bridge_candidates.h"
 #include "core/hgraph/hgraph.h"
 #include "core/measure/measure.h"
+#include "core/merge/path_check.h"
 #include "core/motion/motion_checker.h"
 #include "core/search/search.h"
 
@@ -42,7 +43,7 @@ struct MergeOptions {
   // Anytime post-optimization budget in ms (see merge.proto MergeOptions.optimize_ms): < 0
   // automatic, 0 off.
   double optimize_ms = -1;
-  double endpoint_tolerance = 1e-6;
+  double endpoint_tolerance = kEndpointTolerance;
   int threads = 0;  // worker threads; 0 = all cores
   // > 0: input edges longer than this are subdivided in the H-Graph (see HGraph); 0 = off.
   double max_node_spacing = 0;
@@ -54,29 +55,6 @@ struct MergeRequest {
   MergeOptions options;
   ProgressCallback progress;  // may be empty
   CancelToken cancel;
-};
-
-// Why a path is invalid (hgraph.v1.InputReport.Cause).
-enum class InvalidCause { kNone, kCollision, kOutOfBounds };
-
-// What the check of one path found (core/merge/path_check.h builds it, for a merge's inputs and
-// for CheckPaths alike).
-struct InputReport {
-  std::string name;
-  bool valid = false;
-  int invalid_edge = -1;  // first invalid edge (waypoint i to i+1), or -1
-  std::string invalid_reason;
-  PathQuality quality;
-  int waypoints = 0;
-  double invalid_at = -1;  // the motion's parameter where the check failed on invalid_edge
-  InvalidCause invalid_cause = InvalidCause::kNone;
-  // Every stretch between clearance samples of every edge proven free (EdgeReport::certified).
-  bool certified = false;
-  // Every edge of the path was checked, so `valid` and the qualities are established. False
-  // when lazy evaluation without report_inputs left some edges unchecked: the length is exact,
-  // the path is invalid if a checked edge is (invalid_edge names it), and no clearance is
-  // reported.
-  bool checked = true;
 };
 
 struct MergeStats {

@@ -137,9 +137,10 @@ PathCheckResult CheckPaths(const MotionChecker& checker, const PathCheckRequest&
           for (size_t i = range.begin(); i != range.end(); ++i) {
             if (request.cancel.stopped()) return;
             const InputPath& path = paths[jobs[i].path];
-            reports[i] = checker.CheckEdge(EdgeCheckRequest{.from = &path.waypoints[jobs[i].from],
-                                                            .to = &path.waypoints[jobs[i].to],
-                                                            .need_clearance = need_clearance});
+            reports[i] = checker.CheckEdge(EdgeCheckRequest{
+                .from = &path.waypoints[jobs[i].from],
+                .to = &path.waypoints[jobs[i].to],
+                .mode = need_clearance ? EdgeCheckMode::kClearance : EdgeCheckMode::kSampled});
             const int64_t c = checks += reports[i].collision_checks;
             const int64_t q = queries += reports[i].distance_queries;
             const int64_t d = ++done;

@@ -9,10 +9,34 @@
 #include <vector>
 
 #include "core/common/progress.h"
-#include "core/merge/merge.h"
+#include "core/measure/measure.h"
 #include "core/motion/motion_checker.h"
+#include "core/path/path.h"
 
 namespace hgraph {
+
+// Why a path is invalid (hgraph.v1.InputReport.Cause).
+enum class InvalidCause { kNone, kCollision, kOutOfBounds };
+
+// What the check of one path found (ReportInputPath below builds it, for a merge's inputs and
+// for CheckPaths alike).
+struct InputReport {
+  std::string name;
+  bool valid = false;
+  int invalid_edge = -1;  // first invalid edge (waypoint i to i+1), or -1
+  std::string invalid_reason;
+  PathQuality quality;
+  int waypoints = 0;
+  double invalid_at = -1;  // the motion's parameter where the check failed on invalid_edge
+  InvalidCause invalid_cause = InvalidCause::kNone;
+  // Every stretch between clearance samples of every edge proven free (EdgeReport::certified).
+  bool certified = false;
+  // Every edge of the path was checked, so `valid` and the qualities are established. False
+  // when lazy evaluation without report_inputs left some edges unchecked: the length is exact,
+  // the path is invalid if a checked edge is (invalid_edge names it), and no clearance is
+  // reported.
+  bool checked = true;
+};
 
 enum class CheckMode {
   // Every edge with its clearance profile and the clearance certificate of
@@ -34,8 +58,8 @@ const char* InvalidCauseName(InvalidCause cause);
 struct PathCheckRequest {
   std::vector<InputPath> paths;
   CheckMode mode = CheckMode::kCertified;
-  double k = 3.0;   // exponent of the reported inverse clearance, >= 0
-  int threads = 0;  // worker threads; 0 = all cores
+  double k = kDefaultInverseClearanceK;  // exponent of the reported inverse clearance, >= 0
+  int threads = 0;                       // worker threads; 0 = all cores
   // Names the paths in errors: "<field>[i].waypoints[j]" (the service passes "paths.paths").
   std::string field = "paths";
   ProgressCallback progress;  // phase "check", one unit per edge; may be empty

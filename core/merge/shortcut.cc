@@ -15,7 +15,9 @@ EdgeReport Check(const MotionChecker& checker, const Config& a, const Config& b,
                  int64_t* checked) {
   ++*checked;
   EdgeReport report = checker.CheckEdge(
-      EdgeCheckRequest{.from = &a, .to = &b, .need_clearance = safety > 0, .certify = safety <= 0});
+      EdgeCheckRequest{.from = &a,
+                       .to = &b,
+                       .mode = safety > 0 ? EdgeCheckMode::kClearance : EdgeCheckMode::kCertified});
   const bool ok = report.state == EdgeState::kValid && report.certified &&
                   (safety <= 0 || MinClearance(report) >= safety);
   if (!ok) report.state = EdgeState::kInvalid;

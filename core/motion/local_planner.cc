@@ -183,7 +183,7 @@ EdgeReport LocalPlanner::CheckEdge(const EdgeCheckRequest& request) const {
   const int segments = SampleCount(report.length) - 1;
   EdgeCheck check(s, impl_->body_component, impl_->body_radius, context, from, to);
   // Ends first: the end state is the one most likely to be new to the caller.
-  if (!(request.known_valid && request.need_clearance)) {
+  if (request.mode != EdgeCheckMode::kClearanceOfValid) {
     if (!context.Valid(to)) return invalid(1.0);
     if (!context.Valid(from)) return invalid(0.0);
     for (int k : BisectionOrder(segments)) {
@@ -192,9 +192,9 @@ EdgeReport LocalPlanner::CheckEdge(const EdgeCheckRequest& request) const {
     }
   }
   report.state = EdgeState::kValid;
-  if (!request.need_clearance && !request.certify) return finish();
-  if (!request.need_clearance) {
-    // Conservative advancement (see EdgeCheckRequest::certify). The motion bound is linear in t
+  if (request.mode == EdgeCheckMode::kSampled) return finish();
+  if (request.mode == EdgeCheckMode::kCertified) {
+    // Conservative advancement (see EdgeCheckMode::kCertified). The motion bound is linear in t
     // along a straight motion, so a clearance c at t frees [t, t + c / bound).
     const double bound = check.MotionBound(from, to);
     const double finest = 1.0 / (static_cast<double>(segments) * (1 << kMaxRefineDepth));

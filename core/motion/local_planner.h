@@ -26,7 +26,7 @@ namespace hgraph {
 struct LocalPlannerOptions {
   // Longest step between two checked samples, as a fraction of the space's MaxExtent()
   // (OMPL's "longest valid segment fraction"). Must be > 0.
-  double resolution = 0.01;
+  double resolution = kDefaultResolution;
 };
 
 // Thread safe: one CollisionContext per thread, made on first use. Not copyable.

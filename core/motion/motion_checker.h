@@ -37,22 +37,40 @@ struct EdgeReport {
   int64_t distance_queries = 0;
 };
 
+// Default local-planner resolution: the longest step between two checked samples as a fraction
+// of the space's MaxExtent() (OMPL's "longest valid segment fraction" default). Every default
+// resolution (the local planner's, a scene's unset one, OMPL's in core/plan) is this one.
+inline constexpr double kDefaultResolution = 0.01;
+
+// What a check of one motion establishes.
+enum class EdgeCheckMode {
+  // Validity at the resolution's samples only (OMPL's discrete motion validator).
+  kSampled,
+  // Validity, with the motion also proven free between its samples but no profile recorded,
+  // for a caller that wants the merge's guarantee without clearances (a planner's motion
+  // validator). Conservative advancement: from a point with clearance c the robot moves freely
+  // while no point of it moves c, so one distance query clears a long stretch in open space.
+  // Where the steps would shrink below the profile's finest refinement, the kClearance check
+  // runs instead, so the answer is the one kClearance would give. Sets report.certified.
+  kCertified,
+  // Validity and the clearance profile with its certificate (core/motion/local_planner.h).
+  kClearance,
+  // As kClearance for a motion that already passed the validity check at this checker's
+  // resolution (a stored edge re-checked for its profile): skips straight to the clearance
+  // samples, which find any collision on their own.
+  kClearanceOfValid,
+};
+
 struct EdgeCheckRequest {
   const Config* from = nullptr;
   const Config* to = nullptr;
-  bool need_clearance = false;
-  // The motion already passed the validity check at this checker's resolution (a stored edge
-  // re-checked for its clearance profile): skip straight to the clearance samples, which find
-  // any collision on their own.
-  bool known_valid = false;
-  // Without need_clearance: also prove the motion free between its samples, for a caller that
-  // wants validity with the merge's guarantee but no profile (a planner's motion validator).
-  // Conservative advancement: from a point with clearance c the robot moves freely while no
-  // point of it moves c, so one distance query clears a long stretch in open space. Where the
-  // steps would shrink below the profile's finest refinement, the full clearance check runs
-  // instead, so the answer is the one need_clearance would give. Sets report.certified.
-  bool certify = false;
+  EdgeCheckMode mode = EdgeCheckMode::kSampled;
 };
+
+// True for the modes that record a clearance profile.
+inline bool RecordsClearance(EdgeCheckMode mode) {
+  return mode == EdgeCheckMode::kClearance || mode == EdgeCheckMode::kClearanceOfValid;
+}
 
 // Checks straight motions. Implementations must be thread safe: the H-Graph calls CheckEdge
 // from many worker threads at once. Not copyable (polymorphic base).

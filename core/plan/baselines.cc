@@ -13,24 +13,10 @@ namespace ob = ompl::base;
 namespace og = ompl::geometric;
 using namespace plan_internal;
 
-namespace {
-
-void ValidatePath(const Space& space, const InputPath& path, const std::string& field) {
-  if (path.waypoints.size() < 2) {
-    throw InputError(field, "needs at least two waypoints, got " +
-                                std::to_string(path.waypoints.size()));
-  }
-  for (size_t k = 0; k < path.waypoints.size(); ++k) {
-    space.Validate(path.waypoints[k], field + ".waypoints[" + std::to_string(k) + "]");
-  }
-}
-
-}  // namespace
-
 InputPath ShortcutPath(const MotionChecker& checker, const InputPath& path,
                        const ShortcutOptions& options) {
   const Space& space = checker.space();
-  ValidatePath(space, path, "path");
+  ValidatePath(space, path, "path", 2);
   QuietOmplLogging();
   auto lock = LockOmplRandomness();
   SeedOmpl(options.seed);
@@ -55,7 +41,7 @@ InputPath OmplHybridize(const MotionChecker& checker, const std::vector<InputPat
   const Space& space = checker.space();
   if (paths.empty()) throw InputError("paths", "needs at least one path");
   for (size_t i = 0; i < paths.size(); ++i) {
-    ValidatePath(space, paths[i], "paths[" + std::to_string(i) + "]");
+    ValidatePath(space, paths[i], "paths[" + std::to_string(i) + "]", 2);
   }
   QuietOmplLogging();
   const ob::SpaceInformationPtr si = MakeSpaceInformation(checker, options.resolution);

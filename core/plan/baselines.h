@@ -7,8 +7,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "core/hgraph/hgraph.h"
 #include "core/motion/motion_checker.h"
+#include "core/path/path.h"
 
 namespace hgraph {
 
@@ -16,7 +16,7 @@ struct ShortcutOptions {
   uint64_t seed = 1;  // PathSimplifier draws random pairs of points to connect
   // Rounds of reduceVertices + shortcutPath; stops early when a round shortens nothing.
   int max_rounds = 20;
-  double resolution = 0.01;  // OMPL's discretisation, as in PlanRequest::resolution
+  double resolution = kDefaultResolution;  // OMPL's discretisation, as in PlanRequest::resolution
 };
 
 // OMPL's PathSimplifier on one path: reduceVertices (drop waypoints whose neighbours connect)
@@ -27,7 +27,7 @@ InputPath ShortcutPath(const MotionChecker& checker, const InputPath& path,
                        const ShortcutOptions& options = {});
 
 struct OmplHybridizationOptions {
-  double resolution = 0.01;
+  double resolution = kDefaultResolution;
   // OMPL's recordPath(..., matchAcrossGaps): also bridge the ends of unmatched stretches.
   bool match_across_gaps = true;
 };

@@ -88,7 +88,8 @@ class CheckerMotion final : public ob::MotionValidator {
   // between samples, and a path that grazes would be reported invalid by the merge it was
   // planned for.
   bool Certified(const Config& a, const Config& b) const {
-    return checker_.CheckEdge({.from = &a, .to = &b, .certify = true}).state == EdgeState::kValid;
+    return checker_.CheckEdge({.from = &a, .to = &b, .mode = EdgeCheckMode::kCertified}).state ==
+           EdgeState::kValid;
   }
 
   bool Count(bool valid) const {

@@ -2,18 +2,18 @@
 // header of the project that includes OMPL, so that OMPL stays a private dependency.
 #pragma once
 
-#include <cstdint>
-#include <memory>
-#include <mutex>
-#include <string>
-
 #include <ompl/base/MotionValidator.h>
 #include <ompl/base/SpaceInformation.h>
 #include <ompl/base/StateValidityChecker.h>
 #include <ompl/geometric/PathGeometric.h>
 
-#include "core/hgraph/hgraph.h"
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <string>
+
 #include "core/motion/motion_checker.h"
+#include "core/path/path.h"
 #include "core/space/space.h"
 
 namespace hgraph::plan_internal {

@@ -33,8 +33,7 @@ class ForestPRM final : public og::PRM {
  public:
   explicit ForestPRM(const ob::SpaceInformationPtr& si) : og::PRM(si) {
     setName("PRM-forest");
-    setConnectionFilter(
-        [this](const Vertex& m, const Vertex& n) { return !sameComponent(m, n); });
+    setConnectionFilter([this](const Vertex& m, const Vertex& n) { return !sameComponent(m, n); });
   }
 };
 
@@ -63,19 +62,12 @@ void ValidateEndpoint(const MotionChecker& checker, const Config& q, const std::
 // merge does when it reports the inputs' quality: a path that passes here is valid there too.
 int FirstInvalidEdge(const MotionChecker& checker, const InputPath& path) {
   for (size_t k = 0; k + 1 < path.waypoints.size(); ++k) {
-    const EdgeReport report = checker.CheckEdge(
-        {.from = &path.waypoints[k], .to = &path.waypoints[k + 1], .need_clearance = true});
+    const EdgeReport report = checker.CheckEdge({.from = &path.waypoints[k],
+                                                 .to = &path.waypoints[k + 1],
+                                                 .mode = EdgeCheckMode::kClearance});
     if (report.state != EdgeState::kValid) return static_cast<int>(k);
   }
   return -1;
-}
-
-double PathLength(const Space& space, const InputPath& path) {
-  double length = 0;
-  for (size_t k = 0; k + 1 < path.waypoints.size(); ++k) {
-    length += space.Distance(path.waypoints[k], path.waypoints[k + 1]);
-  }
-  return length;
 }
 
 std::string FormatSeconds(double s) {
@@ -116,7 +108,8 @@ PlanResult PlanPaths(const MotionChecker& checker, const PlanRequest& request) {
     throw InputError("count", "must be at least 1, got " + std::to_string(request.count));
   }
   if (!(request.time_s > 0) || !std::isfinite(request.time_s)) {
-    throw InputError("time_s", "must be positive and finite, got " + std::to_string(request.time_s));
+    throw InputError("time_s",
+                     "must be positive and finite, got " + std::to_string(request.time_s));
   }
   ValidateEndpoint(checker, request.start, "start");
   ValidateEndpoint(checker, request.goal, "goal");
@@ -128,8 +121,8 @@ PlanResult PlanPaths(const MotionChecker& checker, const PlanRequest& request) {
   for (int index = 0; index < request.count; ++index) {
     request.cancel.ThrowIfStopped();
     PlanAttempt attempt{.index = index};
-    const std::string name = std::string(PlannerTypeName(request.planner)) + "-" +
-                             std::to_string(index);
+    const std::string name =
+        std::string(PlannerTypeName(request.planner)) + "-" + std::to_string(index);
     InputPath path;
     {
       auto lock = LockOmplRandomness();
@@ -171,15 +164,14 @@ PlanResult PlanPaths(const MotionChecker& checker, const PlanRequest& request) {
                                .resolution = request.resolution});
         }
       } else {
-        attempt.status = "no path in " + FormatSeconds(request.time_s) + " (OMPL: " +
-                         attempt.status + ")";
+        attempt.status =
+            "no path in " + FormatSeconds(request.time_s) + " (OMPL: " + attempt.status + ")";
       }
     }
     if (!path.waypoints.empty()) {
       // Exact endpoints: every input of a merge must share them bit for bit.
-      const double tolerance = 1e-6;
-      if (space.Distance(path.waypoints.front(), start) > tolerance ||
-          space.Distance(path.waypoints.back(), goal) > tolerance) {
+      if (space.Distance(path.waypoints.front(), start) > kEndpointTolerance ||
+          space.Distance(path.waypoints.back(), goal) > kEndpointTolerance) {
         attempt.status = "planner returned a path with other endpoints";
         path.waypoints.clear();
       } else {
@@ -188,7 +180,8 @@ PlanResult PlanPaths(const MotionChecker& checker, const PlanRequest& request) {
         if (path.waypoints.size() == 1) path.waypoints.push_back(goal);
         const int bad = FirstInvalidEdge(checker, path);
         if (bad >= 0) {
-          attempt.status = "rejected: edge " + std::to_string(bad) + " is invalid under our checker";
+          attempt.status =
+              "rejected: edge " + std::to_string(bad) + " is invalid under our checker";
           path.waypoints.clear();
         }
       }

@@ -31,8 +31,8 @@
 #include <vector>
 
 #include "core/common/progress.h"
-#include "core/hgraph/hgraph.h"
 #include "core/motion/motion_checker.h"
+#include "core/path/path.h"
 
 namespace hgraph {
 
@@ -58,7 +58,7 @@ struct PlanRequest {
   bool simplify = false;
   // Longest motion OMPL checks in one step, as a fraction of the space's extent: pass the local
   // planner's resolution, so that OMPL's own discretisation matches ours.
-  double resolution = 0.01;
+  double resolution = kDefaultResolution;
   PathCallback on_path;  // may be empty
   CancelToken cancel;    // stops the current run and throws Error(kCancelled/kDeadlineExceeded)
 };

@@ -209,14 +209,6 @@ std::vector<int> BodyComponents(const Scene& scene) {
   return {components.begin(), components.end()};
 }
 
-double PathLength(const Space& space, const InputPath& path) {
-  double length = 0;
-  for (size_t i = 0; i + 1 < path.waypoints.size(); ++i) {
-    length += space.Distance(path.waypoints[i], path.waypoints[i + 1]);
-  }
-  return length;
-}
-
 // `count` configurations evenly spaced by arc length along the path, ends included.
 std::vector<Config> SamplesAlong(const Space& space, const InputPath& path, int count) {
   std::vector<Config> samples;
@@ -240,12 +232,6 @@ std::vector<Config> SamplesAlong(const Space& space, const InputPath& path, int 
     samples.push_back(space.Interpolate(path.waypoints[segment], path.waypoints[segment + 1], t));
   }
   return samples;
-}
-
-void ValidatePath(const Space& space, const InputPath& path, const std::string& field) {
-  for (size_t i = 0; i < path.waypoints.size(); ++i) {
-    space.Validate(path.waypoints[i], field + ".waypoints[" + std::to_string(i) + "]");
-  }
 }
 
 class SvgWriter {
@@ -528,18 +514,6 @@ std::string RenderSvg(const Scene& scene, const RenderRequest& request) {
   }
   if (request.merged) ValidatePath(scene.space, request.merged->path, "request.merged");
   return SvgWriter(scene, request).Write();
-}
-
-RenderRequest MergeRenderRequest(const std::vector<InputPath>& inputs, const MergeResult& result) {
-  RenderRequest request;
-  for (size_t i = 0; i < inputs.size(); ++i) {
-    RenderPath path{.path = inputs[i]};
-    if (i < result.inputs.size()) path.quality = result.inputs[i].quality;
-    request.inputs.push_back(std::move(path));
-  }
-  request.merged = RenderPath{.path = result.path, .quality = result.quality};
-  if (request.merged->path.name.empty()) request.merged->path.name = "merged";
-  return request;
 }
 
 }  // namespace hgraph

@@ -9,9 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "core/hgraph/hgraph.h"
 #include "core/measure/measure.h"
-#include "core/merge/merge.h"
+#include "core/path/path.h"
 #include "core/scene/scene.h"
 
 namespace hgraph {
@@ -47,8 +46,5 @@ struct RenderRequest {
 // Throws InputError naming "request.inputs[i]" / "request.merged" if a waypoint does not fit the
 // space, and "request.width_px" / "request.footprints" for out-of-range values.
 std::string RenderSvg(const Scene& scene, const RenderRequest& request);
-
-// The picture of a merge: its inputs with their reported quality and the merged path.
-RenderRequest MergeRenderRequest(const std::vector<InputPath>& inputs, const MergeResult& result);
 
 }  // namespace hgraph

@@ -11,7 +11,6 @@ namespace hgraph {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
-constexpr double kQuaternionTolerance = 1e-3;
 
 double WrapAngle(double a) {
   a = std::fmod(a + kPi, 2 * kPi);

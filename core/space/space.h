@@ -10,6 +10,10 @@
 
 namespace hgraph {
 
+// How far from 1 a quaternion's norm may be before it is rejected rather than renormalised
+// (configurations and poses alike).
+inline constexpr double kQuaternionTolerance = 1e-3;
+
 // A configuration; its layout is given by the Space (SE(3) = x y z qx qy qz qw).
 using Config = Eigen::VectorXd;
 

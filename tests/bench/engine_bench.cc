@@ -89,7 +89,7 @@ const std::vector<std::pair<Config, Config>>& LatticeEdges() {
       Config to = space.Sample(rng);
       to.head<3>() = from.head<3>() + 2.0 * (to.head<3>() - from.head<3>()).normalized();
       if (!space.InBounds(to)) continue;
-      if (planner.CheckEdge({.from = &from, .to = &to, .need_clearance = true}).state ==
+      if (planner.CheckEdge({.from = &from, .to = &to, .mode = EdgeCheckMode::kClearance}).state ==
           EdgeState::kValid) {
         out.emplace_back(from, to);
       }
@@ -109,8 +109,11 @@ void BM_EdgeCheck(benchmark::State& state) {
   int64_t queries = 0, checks = 0, edges_run = 0;
   for (auto _ : state) {
     const auto& [from, to] = edges[i++ % edges.size()];
-    const EdgeReport report = planner.CheckEdge(
-        {.from = &from, .to = &to, .need_clearance = mode == 2, .certify = mode == 1});
+    const EdgeReport report = planner.CheckEdge({.from = &from,
+                                                 .to = &to,
+                                                 .mode = mode == 2   ? EdgeCheckMode::kClearance
+                                                         : mode == 1 ? EdgeCheckMode::kCertified
+                                                                     : EdgeCheckMode::kSampled});
     benchmark::DoNotOptimize(report.state);
     queries += report.distance_queries;
     checks += report.collision_checks;
@@ -128,10 +131,10 @@ void BM_MergeCircles(benchmark::State& state) {
   const auto measure = static_cast<MeasureType>(state.range(1));
   MergeResult last;
   for (auto _ : state) {
-    last = Merge(planner, MergeRequest{.paths = testing::CirclePaths(),
-                                       .measure = {.type = measure},
-                                       .options = {.candidates = {.variant = variant},
-                                                   .threads = 1}});
+    last =
+        Merge(planner, MergeRequest{.paths = testing::CirclePaths(),
+                                    .measure = {.type = measure},
+                                    .options = {.candidates = {.variant = variant}, .threads = 1}});
   }
   state.SetLabel(std::string(VariantName(variant)) + "/" + MeasureTypeName(measure));
   state.counters["candidates"] = static_cast<double>(last.stats.candidate_edges);

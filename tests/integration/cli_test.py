@@ -3,8 +3,9 @@
 bad inputs, in process and through a real hgraph-server on a loopback port (--server).
 Usage: cli_test.py --hgraph BIN [--server-bin BIN] --data tests/data --work DIR CASE, or --list.
 
-Exit codes under test: 0 success, 1 `check` found an invalid edge, 2 bad input with one
-"error: <field>: <problem>" line on stderr.
+Exit codes under test: 0 success, 1 `check` found an invalid edge or `plan` found fewer paths
+than asked, 2 bad input with one "error: <field>: <problem>" line on stderr, 3 the server was
+unreachable or failed.
 """
 import argparse
 import json
@@ -483,6 +484,145 @@ def import_cfg_server_then_merge_in_session(env):
         again = env.run("import-cfg", cfg, "--server", server.target)
         expect(again.returncode == 0 and "session sessions/" in again.stdout,
                "import-cfg --server without --out failed")
+
+
+def same_lines(local, remote, what):
+    """A subcommand run in process and with --server: the same exit code, and the same stdout
+    once numbers of milliseconds are masked and the remote-only "hgraph <name>" line is
+    dropped."""
+    def norm(text):
+        lines = [l for l in text.splitlines() if not l.startswith("hgraph sessions/")]
+        out = []
+        for line in lines:
+            if line.startswith("timing (ms):"):
+                line = "timing (ms): <masked>"
+            out.append(line)
+        return out
+    expect(local.returncode == remote.returncode,
+           "%s: exit %d in process, %d with --server" % (what, local.returncode, remote.returncode))
+    a, b = norm(local.stdout), norm(remote.stdout)
+    expect(a == b, "%s: --server printed other lines:\n%s\nvs in process\n%s"
+           % (what, "\n".join(b), "\n".join(a)))
+
+
+def plan_lines(proc):
+    """`hgraph plan`'s table with the time column masked."""
+    out = []
+    for line in proc.stdout.splitlines():
+        cols = line.split()
+        if len(cols) >= 6 and re.match(r"^[a-z-]+-\d+$", cols[0]):
+            time_at = 2 if cols[1] == "found" else 3
+            cols[time_at] = "<ms>"
+        out.append(re.sub(r"; wrote \S+", "; wrote <out>", " ".join(cols)))
+    return out
+
+
+def circles_scene(env):
+    return env.data.parent.parent / "scenes" / "circles" / "scene.json"
+
+
+def walled_scene(env):
+    """The circles scene with a wall across the whole space between start and goal: no planner
+    can find a path."""
+    scene = json.loads(circles_scene(env).read_text())
+    y = (scene["start"]["values"][1] + scene["goal"]["values"][1]) / 2
+    scene["obstacles"] = [{"name": "wall", "shape": {"box": {"size": [400, 2, 2]}},
+                           "pose": {"position": [40, y, 0]}}]
+    return env.write("walled.json", scene)
+
+
+@case
+def merge_server_same_lines_and_exit_codes(env):
+    with env.server() as server:
+        for extra in ((), ("--measure", "inverse-clearance", "--k", "2"),
+                      ("--variant", "knn", "--phi", "3")):
+            local = env.run("merge", "-q", "--scene", env.scene, "--paths", env.paths, *extra)
+            remote = env.run("merge", "-q", "--server", server.target, "--scene", env.scene,
+                             "--paths", env.paths, *extra)
+            expect(local.returncode == 0, "merge %s failed" % (extra,))
+            same_lines(local, remote, "merge %s" % " ".join(extra))
+            expect("hgraph sessions/" in remote.stdout, "--server names no H-Graph")
+        bad = ("--k", "-1")
+        local = env.run("merge", "--scene", env.scene, "--paths", env.paths, *bad)
+        remote = env.run("merge", "--server", server.target, "--scene", env.scene, "--paths",
+                         env.paths, *bad)
+        env.expect_bad_input(local, "--k")
+        env.expect_bad_input(remote, "--k")
+
+
+@case
+def plan_server_same_lines_and_exit_codes(env):
+    scene = circles_scene(env)
+    with env.server() as server:
+        flags = ("--count", "2", "--time", "60", "--seed", "5", "--resolution", "0.02")
+        local = env.run("plan", "--scene", scene, *flags, "--out", "local.json")
+        remote = env.run("plan", "--server", server.target, "--scene", scene, *flags,
+                         "--out", "remote.json")
+        expect(local.returncode == 0, "plan failed: exit %d" % local.returncode)
+        expect(remote.returncode == local.returncode,
+               "plan --server: exit %d, in process %d" % (remote.returncode, local.returncode))
+        expect(plan_lines(local) == plan_lines(remote),
+               "plan --server printed other lines:\n%s\nvs\n%s" % (remote.stdout, local.stdout))
+        # The planner is the same (the paper's PRM by default), so are the paths.
+        expect("with prm in" in remote.stdout, "plan --server did not default to prm")
+        expect((env.work / "local.json").read_text() == (env.work / "remote.json").read_text(),
+               "plan --server wrote other paths than plan in process")
+
+
+@case
+def plan_server_exits_1_when_paths_are_missing(env):
+    scene = walled_scene(env)
+    with env.server() as server:
+        flags = ("--count", "2", "--time", "0.2", "--out", "none.json")
+        local = env.run("plan", "--scene", scene, *flags)
+        remote = env.run("plan", "--server", server.target, "--scene", scene, *flags)
+        expect(local.returncode == 1, "plan: exit %d, expected 1" % local.returncode)
+        expect(remote.returncode == 1, "plan --server: exit %d, expected 1" % remote.returncode)
+        expect(plan_lines(local) == plan_lines(remote),
+               "plan --server printed other lines:\n%s\nvs\n%s" % (remote.stdout, local.stdout))
+        expect("found 0 of 2" in remote.stdout, "no summary")
+        expect(not (env.work / "none.json").exists(), "a file was written with nothing found")
+
+
+@case
+def plan_server_forwards_resolution(env):
+    # A resolution the planner rejects must reach it: the server would otherwise plan at the
+    # scene's own resolution and succeed.
+    scene = circles_scene(env)
+    with env.server() as server:
+        local = env.run("plan", "--scene", scene, "--resolution", "-1")
+        remote = env.run("plan", "--server", server.target, "--scene", scene, "--resolution", "-1")
+        env.expect_bad_input(local, "resolution")
+        env.expect_bad_input(remote, "resolution")
+
+
+@case
+def server_unreachable_exits_3(env):
+    # Port 1 on loopback: nothing listens there, the channel fails with UNAVAILABLE.
+    for args in (("check", "--scene", env.scene, "--paths", env.paths),
+                 ("merge", "--scene", env.scene, "--paths", env.paths),
+                 ("plan", "--scene", circles_scene(env))):
+        proc = env.run(*args, "--server", "127.0.0.1:1", "--timeout", "20")
+        expect(proc.returncode == 3, "%s: exit %d, expected 3" % (args[0], proc.returncode))
+        expect("UNAVAILABLE" in proc.stderr or "DEADLINE_EXCEEDED" in proc.stderr,
+               "%s: no status on stderr: %r" % (args[0], proc.stderr))
+
+
+@case
+def mesh_without_extension_server(env):
+    shutil.copy(env.data.parent.parent / "scenes" / "wrench" / "wrench.obj", env.work / "wrench")
+    scene = scene_with_mesh(env, "wrench")
+    with env.server() as server:
+        local = env.run("check", "--scene", scene, "--paths", env.paths)
+        remote = env.run("check", "--server", server.target, "--scene", scene, "--paths",
+                         env.paths)
+        for proc in (local, remote):
+            expect("out_of_range" not in proc.stderr and "basic_string" not in proc.stderr,
+                   "an exception escaped: %r" % proc.stderr)
+        # In process assimp tells the format from the bytes; a blob on the server needs it named
+        # (the server's rule), and the message says which field.
+        expect(local.returncode == 0, "in process: exit %d" % local.returncode)
+        env.expect_bad_input(remote, "scene.obstacles[70].shape.mesh.format")
 
 
 def plan_merge_check(env, name):

@@ -1,5 +1,3 @@
-#include "core/collision/collision_world.h"
-
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -16,6 +14,7 @@
 #include <thread>
 #include <vector>
 
+#include "core/collision/collision_world.h"
 #include "core/common/error.h"
 
 namespace hgraph {
@@ -66,7 +65,9 @@ std::shared_ptr<const Mesh> SphereMesh(double radius, int rings, int segments) {
   return mesh;
 }
 
-Shape BoxShape(const Eigen::Vector3d& size) { return Shape{.type = ShapeType::kBox, .box_size = size}; }
+Shape BoxShape(const Eigen::Vector3d& size) {
+  return Shape{.type = ShapeType::kBox, .box_size = size};
+}
 Shape MeshShape(std::shared_ptr<const Mesh> mesh) {
   return Shape{.type = ShapeType::kMesh, .mesh = std::move(mesh), .source = "test"};
 }
@@ -107,13 +108,12 @@ std::shared_ptr<const Scene> CircleScene(const std::vector<Disc>& discs, double 
     o.pose.translation() = Eigen::Vector3d(d.x, d.y, 0);
     scene->obstacles.push_back(o);
   }
-  scene->robot.push_back(
-      RobotBody{.name = "disc", .shape = Shape{.type = ShapeType::kSphere, .radius = robot_radius}});
+  scene->robot.push_back(RobotBody{
+      .name = "disc", .shape = Shape{.type = ShapeType::kSphere, .radius = robot_radius}});
   return scene;
 }
 
-double AnalyticDiscClearance(const std::vector<Disc>& discs, double robot_radius,
-                             const Config& q) {
+double AnalyticDiscClearance(const std::vector<Disc>& discs, double robot_radius, const Config& q) {
   double best = std::numeric_limits<double>::infinity();
   for (const Disc& d : discs) best = std::min(best, std::hypot(q[0] - d.x, q[1] - d.y) - d.r);
   return std::max(0.0, best - robot_radius);
@@ -132,7 +132,10 @@ std::shared_ptr<const Scene> MeshScene() {
   for (int i = 0; i < 40; ++i) {
     Obstacle o{.name = "o" + std::to_string(i), .shape = MeshShape(i % 2 ? ball : box)};
     o.pose.translation() = Eigen::Vector3d(coord(rng), coord(rng), coord(rng));
-    o.pose.linear() = Eigen::Quaterniond::UnitRandom().toRotationMatrix();
+    // A uniform rotation from the seeded generator (Eigen's UnitRandom draws from std::rand).
+    std::normal_distribution<double> gauss;
+    Eigen::Quaterniond rotation(gauss(rng), gauss(rng), gauss(rng), gauss(rng));
+    o.pose.linear() = rotation.normalized().toRotationMatrix();
     scene->obstacles.push_back(o);
   }
   RobotBody robot{.name = "ball", .shape = MeshShape(SphereMesh(1.0, 16, 32))};
@@ -179,8 +182,8 @@ TEST_P(BoxPairTest, ValidityAndClearanceMatchTheGap) {
   EXPECT_NEAR(context->Clearance(Se3(1.5, 1.5, 0)), std::sqrt(0.5), kTolerance);
   EXPECT_NEAR(context->Clearance(Se3(1.5, 1.5, 1.5)), std::sqrt(0.75), kTolerance);
   // Turned 45 degrees about Z, the robot reaches sqrt(2)/2 along X.
-  EXPECT_NEAR(context->Clearance(Se3(1.0, 0, 0, std::numbers::pi / 4)),
-              1.5 - std::sqrt(0.5), kTolerance);
+  EXPECT_NEAR(context->Clearance(Se3(1.0, 0, 0, std::numbers::pi / 4)), 1.5 - std::sqrt(0.5),
+              kTolerance);
   for (double overlap : {1e-3, 0.5, 1.0}) {
     const Config q = Se3(2 + overlap, 0, 0);
     EXPECT_FALSE(context->Valid(q)) << overlap;
@@ -269,9 +272,8 @@ std::shared_ptr<const Scene> TwoBoxesScene(bool self_collision, int second_compo
                             .upper = Eigen::Vector2d(10, 10)};
   auto scene = std::make_shared<Scene>(Scene{.space = Space({plane, plane})});
   scene->robot.push_back(RobotBody{.name = "a", .shape = BoxShape(Eigen::Vector3d::Ones())});
-  scene->robot.push_back(RobotBody{.name = "b",
-                                   .shape = BoxShape(Eigen::Vector3d::Ones()),
-                                   .component = second_component});
+  scene->robot.push_back(RobotBody{
+      .name = "b", .shape = BoxShape(Eigen::Vector3d::Ones()), .component = second_component});
   scene->self_collision = self_collision;
   return scene;
 }
@@ -411,36 +413,6 @@ TEST(CollisionWorldThreadTest, TwoThreadsOnTheCircleSceneAgreeWithOne) {
 TEST(CollisionWorldThreadTest, TwoThreadsOnSharedMeshesAgreeWithOne) {
   const CollisionWorld world(MeshScene());
   ExpectTwoThreadsMatchOne(world, 600);
-}
-
-// --- timing (printed, not asserted) --------------------------------------------------------
-
-void PrintTimes(const char* name, const CollisionWorld& world, int checks, int queries) {
-  std::mt19937_64 rng(99);
-  std::vector<Config> configs;
-  for (int i = 0; i < checks; ++i) configs.push_back(world.space().Sample(rng));
-  auto context = world.MakeContext();
-  using Clock = std::chrono::steady_clock;
-  int valid = 0;
-  auto start = Clock::now();
-  for (const Config& q : configs) valid += context->Valid(q);
-  const double check_us =
-      std::chrono::duration<double, std::micro>(Clock::now() - start).count() / checks;
-  double sum = 0;
-  start = Clock::now();
-  for (int i = 0; i < queries; ++i) sum += context->Clearance(configs[i]);
-  const double query_us =
-      std::chrono::duration<double, std::micro>(Clock::now() - start).count() / queries;
-  std::printf("[ timing ] %s: %.2f us per collision check (%d of %d valid), %.2f us per "
-              "distance query (mean clearance %.3f)\n",
-              name, check_us, valid, checks, query_us, sum / queries);
-}
-
-TEST(CollisionWorldTiming, PrintsTimePerQuery) {
-  PrintTimes("circles, point robot, 70 cylinders", CollisionWorld(CircleScene(LoadDiscs(), 0.0)),
-             20000, 20000);
-  PrintTimes("meshes, 960-triangle robot, 40 mesh obstacles",
-             CollisionWorld(MeshScene()), 4000, 1000);
 }
 
 }  // namespace

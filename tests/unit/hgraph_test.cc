@@ -2,7 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
+#include <set>
 
 #include "core/common/error.h"
 #include "core/hgraph/bridge_candidates.h"
@@ -155,8 +157,24 @@ TEST(BridgeCandidatesTest, NeighborhoodRespectsRadiusAndKnnCountsNeighbours) {
   EXPECT_EQ(static_cast<int>(near.pairs.size()), close);
   const CandidateSet knn =
       BridgeCandidates(graph, space, CandidateOptions{.variant = Variant::kKNearest, .phi = 2});
-  EXPECT_LE(static_cast<int>(knn.pairs.size()), 2 * graph.num_nodes());
-  EXPECT_GT(knn.pairs.size(), 0u);
+  // Exactly the union over nodes u of u's two nearest other nodes (random real coordinates: no
+  // ties), as unordered pairs, less the pairs an input edge already joins.
+  std::set<std::pair<int, int>> expected;
+  for (int u = 0; u < graph.num_nodes(); ++u) {
+    std::vector<std::pair<double, int>> by_distance;
+    for (int v = 0; v < graph.num_nodes(); ++v) {
+      if (v != u) by_distance.emplace_back(space.Distance(graph.node(u).q, graph.node(v).q), v);
+    }
+    std::sort(by_distance.begin(), by_distance.end());
+    for (int k = 0; k < 2; ++k) {
+      const int v = by_distance[k].second;
+      if (graph.FindEdge(u, v) < 0) expected.insert({std::min(u, v), std::max(u, v)});
+    }
+  }
+  const std::set<std::pair<int, int>> found(knn.pairs.begin(), knn.pairs.end());
+  EXPECT_EQ(found.size(), knn.pairs.size()) << "no pair twice";
+  EXPECT_EQ(found, expected);
+  EXPECT_FALSE(expected.empty());
 }
 
 TEST(BridgeCandidatesTest, EditDistanceIsLinearPerPairOfPaths) {

@@ -67,7 +67,10 @@ std::shared_ptr<const CollisionWorld> CircleWorld() {
 
 EdgeReport Check(const LocalPlanner& planner, const Config& from, const Config& to,
                  bool need_clearance = false) {
-  return planner.CheckEdge({.from = &from, .to = &to, .need_clearance = need_clearance});
+  return planner.CheckEdge(
+      {.from = &from,
+       .to = &to,
+       .mode = need_clearance ? EdgeCheckMode::kClearance : EdgeCheckMode::kSampled});
 }
 
 TEST(LocalPlannerTest, RejectsBadResolution) {
@@ -237,7 +240,8 @@ TEST(LocalPlannerTest, CertifyAgreesWithTheClearanceCheckAndCostsLess) {
     Config to = world->space().Sample(rng);
     to.head<2>() = from.head<2>() + 0.15 * (to.head<2>() - from.head<2>());
     const EdgeReport profile = Check(planner, from, to, true);
-    const EdgeReport certify = planner.CheckEdge({.from = &from, .to = &to, .certify = true});
+    const EdgeReport certify =
+        planner.CheckEdge({.from = &from, .to = &to, .mode = EdgeCheckMode::kCertified});
     ASSERT_EQ(certify.state, profile.state) << "edge " << i;
     if (certify.state != EdgeState::kValid) {
       ++invalid;
@@ -265,7 +269,8 @@ TEST(LocalPlannerTest, CertifyAgreesWithTheClearanceCheckAndCostsLess) {
   std::uniform_real_distribution<double> coord(0.5, 6);
   for (int i = 0; i < 20; ++i) {
     const Config from = Vec({coord(rng), coord(rng)}), to = Vec({coord(rng), coord(rng)});
-    const EdgeReport report = open.CheckEdge({.from = &from, .to = &to, .certify = true});
+    const EdgeReport report =
+        open.CheckEdge({.from = &from, .to = &to, .mode = EdgeCheckMode::kCertified});
     ASSERT_EQ(report.state, EdgeState::kValid);
     EXPECT_TRUE(report.certified);
     EXPECT_LT(report.distance_queries, 12);
@@ -275,7 +280,8 @@ TEST(LocalPlannerTest, CertifyAgreesWithTheClearanceCheckAndCostsLess) {
   // The thin wall between samples: certify catches it as the clearance check does.
   const LocalPlanner coarse(PointWorld({Box(3, 5, 0.05, 4)}), {.resolution = 0.5});
   const Config a = Vec({1, 5}), b = Vec({9, 5});
-  const EdgeReport thin = coarse.CheckEdge({.from = &a, .to = &b, .certify = true});
+  const EdgeReport thin =
+      coarse.CheckEdge({.from = &a, .to = &b, .mode = EdgeCheckMode::kCertified});
   EXPECT_EQ(thin.state, EdgeState::kInvalid);
   EXPECT_FALSE(thin.certified);
 }

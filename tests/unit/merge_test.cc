@@ -34,8 +34,9 @@ class MergeTest : public ::testing::Test {
   // Every edge of the path passes the local planner.
   static void ExpectValid(const LocalPlanner& planner, const InputPath& path) {
     for (size_t j = 0; j + 1 < path.waypoints.size(); ++j) {
-      const EdgeReport r = planner.CheckEdge(
-          {.from = &path.waypoints[j], .to = &path.waypoints[j + 1], .need_clearance = false});
+      const EdgeReport r = planner.CheckEdge({.from = &path.waypoints[j],
+                                              .to = &path.waypoints[j + 1],
+                                              .mode = EdgeCheckMode::kSampled});
       EXPECT_EQ(r.state, EdgeState::kValid) << "edge " << j;
     }
   }
@@ -97,39 +98,46 @@ class MergePropertyTest : public MergeTest, public ::testing::WithParamInterface
 TEST_P(MergePropertyTest, EveryVariantAndMeasureKeepsTheInvariants) {
   const LocalPlanner planner = MakePlanner();
   const std::vector<InputPath> inputs = PerturbedPaths(planner, GetParam(), 4);
+  // A safety some input meets, so that every variant must find a safe path (the merge is never
+  // worse than its best input), and one no configuration of the scene meets.
+  double safest_input = 0;
+  for (const InputReport& report : CheckPaths(planner, {.paths = inputs}).paths) {
+    if (report.valid) safest_input = std::max(safest_input, report.quality.min_clearance);
+  }
+  ASSERT_GT(safest_input, 0);
   const std::vector<MeasureSpec> measures = {
       {.type = MeasureType::kLength},
       {.type = MeasureType::kInverseClearance, .k = 3},
       {.type = MeasureType::kInverseClearance, .k = 0.25},
       {.type = MeasureType::kBottleneckClearance},
-      {.type = MeasureType::kSafeLength, .safety = 0.5},
+      {.type = MeasureType::kSafeLength, .safety = 0.5 * safest_input},
   };
   for (const MeasureSpec& measure : measures) {
     double all_pairs_objective = 0;
     for (Variant variant : {Variant::kAllPairs, Variant::kNeighborhood, Variant::kKNearest,
                             Variant::kEditDistance, Variant::kEditDistanceNeighborhood}) {
       SCOPED_TRACE(std::string(VariantName(variant)) + " / " + MeasureTypeName(measure.type));
-      // Lazy with every input reported, lazy alone, eager: same candidates, same checks.
+      // Lazy with every input reported, lazy alone, eager: same candidates, same checks. Every
+      // measure here (the safety is one some input meets) has a path in every mode.
       std::vector<MergeResult> runs;
-      bool failed = false;
       for (const MergeOptions& options :
            {MergeOptions{.candidates = {.variant = variant}, .report_inputs = true},
             MergeOptions{.candidates = {.variant = variant}},
             MergeOptions{.candidates = {.variant = variant}, .evaluation = Evaluation::kEager}}) {
-        try {
-          runs.push_back(Merge(
-              planner, MergeRequest{.paths = inputs, .measure = measure, .options = options}));
-        } catch (const Error& e) {
-          // Only a safety demand no input meets may fail, and then with the field named, in
-          // every evaluation mode.
-          ASSERT_EQ(measure.type, MeasureType::kSafeLength) << e.what();
-          EXPECT_EQ(e.field(), "measure.safety");
-          failed = true;
-        }
+        runs.push_back(
+            Merge(planner, MergeRequest{.paths = inputs, .measure = measure, .options = options}));
       }
-      if (failed) {
-        EXPECT_TRUE(runs.empty()) << "the evaluation modes disagree on whether a path exists";
-        continue;
+      if (measure.type == MeasureType::kSafeLength) {
+        // A safety nothing in the scene meets fails, naming the field.
+        try {
+          Merge(planner, MergeRequest{.paths = inputs,
+                                      .measure = {.type = MeasureType::kSafeLength, .safety = 1e3},
+                                      .options = {.candidates = {.variant = variant}}});
+          ADD_FAILURE() << "a safety of 1e3 was met";
+        } catch (const Error& e) {
+          EXPECT_EQ(e.code(), ErrorCode::kFailedPrecondition) << e.what();
+          EXPECT_EQ(e.field(), "measure.safety") << e.what();
+        }
       }
       for (const MergeResult& r : runs) {
         ExpectValid(planner, r.path);

@@ -23,8 +23,8 @@ namespace fs = std::filesystem;
 
 // Unit cube [0,1]^3: vertex i has coordinates (bit 0, bit 1, bit 2) of i; faces wound outwards.
 Eigen::Vector3d CubeVertex(int i) { return Eigen::Vector3d(i & 1, (i >> 1) & 1, (i >> 2) & 1); }
-constexpr std::array<std::array<int, 4>, 6> kCubeQuads = {{
-    {0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}}};
+constexpr std::array<std::array<int, 4>, 6> kCubeQuads = {
+    {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}}};
 
 std::vector<std::array<int, 3>> CubeTriangles() {
   std::vector<std::array<int, 3>> out;
@@ -73,7 +73,8 @@ std::string CubePly() {
     const Eigen::Vector3d v = CubeVertex(i);
     s << v.x() << " " << v.y() << " " << v.z() << "\n";
   }
-  for (const auto& q : kCubeQuads) s << "4 " << q[0] << " " << q[1] << " " << q[2] << " " << q[3] << "\n";
+  for (const auto& q : kCubeQuads)
+    s << "4 " << q[0] << " " << q[1] << " " << q[2] << " " << q[3] << "\n";
   return s.str();
 }
 

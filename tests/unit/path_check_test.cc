@@ -110,7 +110,9 @@ TEST(PathCheckTest, AgreesWithTheMergesInputReports) {
   inputs.push_back(InputPath{
       .name = "straight", .waypoints = {inputs[0].waypoints.front(), inputs[0].waypoints.back()}});
   const MeasureSpec measure{.type = MeasureType::kInverseClearance, .k = 2};
-  const MergeResult merged = Merge(planner, MergeRequest{.paths = inputs, .measure = measure, .options = {.report_inputs = true}});
+  const MergeResult merged =
+      Merge(planner,
+            MergeRequest{.paths = inputs, .measure = measure, .options = {.report_inputs = true}});
   const PathCheckResult checked =
       CheckPaths(planner, PathCheckRequest{.paths = inputs, .k = 2, .threads = 2});
   ASSERT_EQ(checked.paths.size(), merged.inputs.size());

@@ -48,8 +48,9 @@ PlanRequest MazeRequest(const Fixture& f, PlannerType planner, uint64_t seed) {
 void ExpectValid(const LocalPlanner& planner, const InputPath& path) {
   ASSERT_GE(path.waypoints.size(), 2u);
   for (size_t j = 0; j + 1 < path.waypoints.size(); ++j) {
-    const EdgeReport r = planner.CheckEdge(
-        {.from = &path.waypoints[j], .to = &path.waypoints[j + 1], .need_clearance = true});
+    const EdgeReport r = planner.CheckEdge({.from = &path.waypoints[j],
+                                            .to = &path.waypoints[j + 1],
+                                            .mode = EdgeCheckMode::kClearance});
     EXPECT_EQ(r.state, EdgeState::kValid) << path.name << " edge " << j;
   }
 }
@@ -135,16 +136,18 @@ TEST_F(PlanTest, SameSeedSamePathsForSingleThreadedPlanners) {
   }
 }
 
-// The paper's PRM finds its path in the first timed sampling phase here, so it reproduces too.
-TEST_F(PlanTest, SameSeedSamePathsForForestPRMOnAnEasyScene) {
-  const PlanResult a = PlanPaths(*maze_->planner, MazeRequest(*maze_, PlannerType::kPRM, 3));
-  const PlanResult b = PlanPaths(*maze_->planner, MazeRequest(*maze_, PlannerType::kPRM, 3));
+// OMPL's PRM grows its roadmap for as long as its time-based termination allows, so how many
+// samples it draws (and which path it returns) depends on the machine's load: same-seed
+// reproduction is asserted for the tree planners above only. What holds for PRM on every
+// machine: each run returns a valid path between the query's ends.
+TEST_F(PlanTest, ForestPRMFindsValidPathsOnAnEasyScene) {
+  const PlanRequest request = MazeRequest(*maze_, PlannerType::kPRM, 3);
+  const PlanResult a = PlanPaths(*maze_->planner, request);
   ASSERT_EQ(a.paths.size(), 2u);
-  ASSERT_EQ(b.paths.size(), 2u);
-  for (size_t i = 0; i < a.paths.size(); ++i) {
-    if (a.attempts[i].elapsed_ms < 300 && b.attempts[i].elapsed_ms < 300) {
-      EXPECT_EQ(a.paths[i].waypoints, b.paths[i].waypoints) << "path " << i;
-    }
+  for (const InputPath& path : a.paths) {
+    ExpectValid(*maze_->planner, path);
+    EXPECT_EQ(path.waypoints.front(), request.start);
+    EXPECT_EQ(path.waypoints.back(), request.goal);
   }
 }
 
@@ -174,7 +177,6 @@ TEST(PlanNoPathTest, NoPathInTimeIsReportedNotThrown) {
     for (const PlanAttempt& a : result.attempts) {
       EXPECT_FALSE(a.found);
       EXPECT_NE(a.status.find("no path"), std::string::npos) << a.status;
-      EXPECT_GE(a.elapsed_ms, 150);
     }
   }
 }

@@ -2,10 +2,13 @@
 // librsvg renders the pictures is checked end to end in tests/integration/picture_test.py.
 #include <gtest/gtest.h>
 
+#include <sstream>
 #include <string>
+#include <vector>
 
 #include "core/collision/collision_world.h"
 #include "core/common/error.h"
+#include "core/merge/merge.h"
 #include "core/motion/local_planner.h"
 #include "core/render/svg_render.h"
 #include "tests/unit/test_scenes.h"
@@ -33,6 +36,34 @@ Scene BarScene() {
       .name = "bar",
       .shape = Shape{.type = ShapeType::kBox, .box_size = Eigen::Vector3d(1.5, 0.3, 0.3)}});
   return scene;
+}
+
+// The points of the first polyline drawn in `colour` (pixel coordinates).
+std::vector<Eigen::Vector2d> PolylineOfColour(const std::string& svg, const std::string& colour) {
+  const std::string tag = "<polyline points=\"";
+  for (size_t at = svg.find(tag); at != std::string::npos; at = svg.find(tag, at + 1)) {
+    const size_t end = svg.find("/>", at);
+    const std::string element = svg.substr(at, end - at);
+    if (element.find("stroke=\"" + colour + "\"") == std::string::npos) continue;
+    std::istringstream in(element.substr(tag.size(), element.find('"', tag.size()) - tag.size()));
+    std::vector<Eigen::Vector2d> points;
+    double x = 0, y = 0;
+    char comma = 0;
+    while (in >> x >> comma >> y) points.emplace_back(x, y);
+    return points;
+  }
+  return {};
+}
+
+// The picture `hgraph merge --svg` draws: the inputs with their reported quality, the merged path.
+RenderRequest MergeRenderRequest(const std::vector<InputPath>& inputs, const MergeResult& result) {
+  RenderRequest request;
+  for (size_t i = 0; i < inputs.size(); ++i) {
+    request.inputs.push_back(RenderPath{.path = inputs[i], .quality = result.inputs[i].quality});
+  }
+  request.merged = RenderPath{.path = result.path, .quality = result.quality};
+  request.merged->path.name = "merged";
+  return request;
 }
 
 InputPath Path(const std::string& name, std::vector<Eigen::Vector3d> points) {
@@ -140,14 +171,26 @@ TEST(RenderTest, PlanesProjectTheRightAxes) {
   Scene scene{.name = "s", .space = Space::SE3(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(4, 4, 2))};
   scene.robot.push_back(
       RobotBody{.shape = Shape{.type = ShapeType::kCylinder, .radius = 0.2, .length = 1}});
+  // The motion moves (2, 0.5, 1) in (x, y, z): each plane sees another pair of those, so the
+  // drawn segment's slope tells which axes were projected (the view keeps the aspect ratio,
+  // the first axis points right and the second up).
   Eigen::VectorXd a(7), b(7);
-  a << 1, 1, 1, 0, 0, 0, 1;
-  b << 3, 3, 1.5, 0, 0.7071067811865476, 0, 0.7071067811865476;
+  a << 1, 1, 0.5, 0, 0, 0, 1;
+  b << 3, 1.5, 1.5, 0, 0.7071067811865476, 0, 0.7071067811865476;
   InputPath path{.name = "p", .waypoints = {a, b}};
-  for (Plane plane : {Plane::kXY, Plane::kXZ, Plane::kYZ}) {
+  const std::vector<std::pair<Plane, Eigen::Vector2d>> expected = {
+      {Plane::kXY, {2, 0.5}}, {Plane::kXZ, {2, 1}}, {Plane::kYZ, {0.5, 1}}};
+  for (const auto& [plane, step] : expected) {
+    SCOPED_TRACE(PlaneName(plane));
     const std::string svg =
         RenderSvg(scene, RenderRequest{.merged = RenderPath{.path = path}, .plane = plane});
     EXPECT_NE(svg.find(std::string("(") + PlaneName(plane) + " plane)"), std::string::npos);
+    const std::vector<Eigen::Vector2d> points = PolylineOfColour(svg, "#d62728");
+    ASSERT_EQ(points.size(), 2u);
+    const Eigen::Vector2d d = points[1] - points[0];
+    EXPECT_GT(d.x(), 0) << "the first axis points right";
+    EXPECT_LT(d.y(), 0) << "the second axis points up";
+    EXPECT_NEAR(-d.y() / d.x(), step.y() / step.x(), 0.01 * step.y() / step.x());
   }
 }
 
