@@ -3,8 +3,8 @@
 meshes. Standard library only; rerunning reproduces the files byte for byte.
 
   hole_wall  a rod (3 x 0.4 x 0.4 box mesh) starts across the direction of travel and must turn
-             end first through a 1.1 x 1.1 square hole in a wall (one mesh, 0.3 thick).
-  two_slots  a rod (2 x 0.3 x 0.3) passes two walls 3 apart whose 0.9 x 0.9 holes are offset by
+             end first through a 1.6 x 1.6 square hole in a wall (one mesh, 0.3 thick).
+  two_slots  a rod (1.6 x 0.3 x 0.3) passes two walls 3 apart whose 1.3 x 1.3 holes are offset by
              3 in y, so it threads one hole, turns between the walls and threads the other.
 """
 
@@ -81,19 +81,19 @@ def write(name, data, walls, rod_size, description):
 
 
 def main():
-    desc = ("A rod (3 x 0.4 x 0.4) starts across the direction of travel and must turn end first "
-            "through a 1.1 x 1.1 square hole in a 0.3 thick wall mesh.")
+    desc = ("A rod (2.5 x 0.4 x 0.4) starts across the direction of travel and must turn end first "
+            "through a 1.6 x 1.6 square hole in a 0.3 thick wall mesh.")
     write("hole_wall",
           scene("hole_wall", desc, [-5.0, -3.0, -3.0], [5.0, 3.0, 3.0],
                 [-3.5, 0.0, 0.0] + ACROSS, [3.5, 0.0, 0.0] + ACROSS, 0.005),
-          wall_with_hole(0.0, 0.3, 3.5, (0.0, 0.0), 1.1), (3.0, 0.4, 0.4), desc)
-    desc = ("A rod (2 x 0.3 x 0.3) threads two 0.3 thick walls 3 apart whose 0.9 x 0.9 holes are "
+          wall_with_hole(0.0, 0.3, 3.5, (0.0, 0.0), 1.6), (2.5, 0.4, 0.4), desc)
+    desc = ("A rod (1.6 x 0.3 x 0.3) threads two 0.3 thick walls 3 apart whose 1.3 x 1.3 holes are "
             "offset by 3 in y: through one hole, a turn between the walls, through the other.")
     write("two_slots",
           scene("two_slots", desc, [-5.0, -3.0, -3.0], [5.0, 3.0, 3.0],
                 [-3.5, 1.5, 0.0] + ACROSS, [3.5, -1.5, 0.0] + ACROSS, 0.005),
-          wall_with_hole(-1.5, 0.3, 3.5, (1.5, 0.0), 0.9)
-          + wall_with_hole(1.5, 0.3, 3.5, (-1.5, 0.0), 0.9), (2.0, 0.3, 0.3), desc)
+          wall_with_hole(-1.5, 0.3, 3.5, (1.5, 0.0), 1.3)
+          + wall_with_hole(1.5, 0.3, 3.5, (-1.5, 0.0), 1.3), (1.6, 0.3, 0.3), desc)
 
 
 if __name__ == "__main__":
