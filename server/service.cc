@@ -332,8 +332,10 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
     {
       std::lock_guard lock(mutex_);
       if (writing_ || final_pending_) return;
-      // The first report goes out at once so that even a short merge shows progress.
-      if (sent_any_ && now - last_sent_ < interval_) return;
+      // The first report goes out at once so that even a short merge shows progress, and so
+      // does each improvement of the post-optimization.
+      const bool improvement = !std::isnan(progress.objective);
+      if (sent_any_ && !improvement && now - last_sent_ < interval_) return;
       writing_ = true;
       sent_any_ = true;
       last_sent_ = now;
@@ -344,6 +346,11 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
       p->set_collision_checks(progress.collision_checks);
       p->set_distance_queries(progress.distance_queries);
       p->set_elapsed_ms(std::chrono::duration<double, std::milli>(now - started_).count());
+      if (improvement) {
+        p->set_objective(progress.objective);
+      } else {
+        p->clear_objective();
+      }
     }
     StartWrite(&progress_message_);
   }

@@ -136,6 +136,10 @@ MergeOptions MergeOptionsFromProto(const v1::MergeOptions& proto) {
                        "unknown evaluation " + std::to_string(proto.evaluation()));
   }
   options.report_inputs = proto.report_inputs();
+  if (proto.has_optimize_ms()) {
+    RequireNonNegative(proto.optimize_ms(), "options.optimize_ms");
+    options.optimize_ms = proto.optimize_ms();
+  }
   return options;
 }
 
@@ -231,6 +235,8 @@ v1::MergeResult MergeResultToProto(const MergeResult& result) {
   stats->set_gap_extend(s.gap_extend);
   stats->set_search_rounds(s.search_rounds);
   stats->set_node_clearances(s.node_clearances);
+  stats->set_optimize_rounds(s.optimize_rounds);
+  stats->set_shortcuts(s.shortcuts);
   const MergeTiming& t = result.timing;
   v1::Timing* timing = proto.mutable_timing();
   timing->set_validate_ms(t.validate_ms);
@@ -240,6 +246,7 @@ v1::MergeResult MergeResultToProto(const MergeResult& result) {
   timing->set_check_ms(t.check_ms);
   timing->set_search_ms(t.search_ms);
   timing->set_evaluate_ms(t.evaluate_ms);
+  timing->set_optimize_ms(t.optimize_ms);
   timing->set_total_ms(t.total_ms);
   for (int p : result.source_path) proto.add_source_path(p);
   for (int i : result.source_index) proto.add_source_index(i);
@@ -249,6 +256,7 @@ v1::MergeResult MergeResultToProto(const MergeResult& result) {
   proto.set_best_input(result.best_input);
   proto.set_objective(result.objective);
   proto.set_best_input_objective(result.best_input_objective);
+  proto.set_hgraph_objective(result.hgraph_objective);
   return proto;
 }
 
@@ -273,6 +281,8 @@ MergeResult MergeResultFromProto(const v1::MergeResult& proto) {
                             .edges_reused = s.edges_reused(),
                             .search_rounds = s.search_rounds(),
                             .node_clearances = s.node_clearances(),
+                            .optimize_rounds = s.optimize_rounds(),
+                            .shortcuts = s.shortcuts(),
                             .threads = s.threads(),
                             .alignments = s.alignments(),
                             .radius = s.radius(),
@@ -286,6 +296,7 @@ MergeResult MergeResultFromProto(const v1::MergeResult& proto) {
                               .check_ms = t.check_ms(),
                               .search_ms = t.search_ms(),
                               .evaluate_ms = t.evaluate_ms(),
+                              .optimize_ms = t.optimize_ms(),
                               .total_ms = t.total_ms()};
   result.source_path.assign(proto.source_path().begin(), proto.source_path().end());
   result.source_index.assign(proto.source_index().begin(), proto.source_index().end());
@@ -294,6 +305,7 @@ MergeResult MergeResultFromProto(const v1::MergeResult& proto) {
   result.best_input = proto.best_input();
   result.objective = proto.objective();
   result.best_input_objective = proto.best_input_objective();
+  result.hgraph_objective = proto.hgraph_objective();
   return result;
 }
 

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -58,6 +59,9 @@ struct Progress {
   int64_t collision_checks = 0;
   int64_t distance_queries = 0;
   double elapsed_ms = 0;
+  // Phase "optimize": the objective of the best path so far, after each improvement (NaN in
+  // every other phase).
+  double objective = std::numeric_limits<double>::quiet_NaN();
 };
 
 // Called from worker threads, possibly concurrently; must be thread safe and cheap.

@@ -56,9 +56,44 @@ HGraph::HGraph(const Space& space, std::vector<InputPath> paths, double endpoint
   nodes_.push_back(
       HNode{.q = goal, .path = 0, .index = static_cast<int>(paths_[0].waypoints.size()) - 1});
   adjacency_.resize(2);
+  for (int p = 0; p < num_paths(); ++p) AppendPath(space, p, max_node_spacing);
+}
+
+int HGraph::AddPath(const Space& space, InputPath path, double endpoint_tolerance,
+                    double max_node_spacing, const std::string& field) {
+  if (path.name.empty()) path.name = "path" + std::to_string(num_paths());
+  if (path.waypoints.size() < 2) {
+    throw InputError(field + ".waypoints", "path '" + path.name + "' has " +
+                                               std::to_string(path.waypoints.size()) +
+                                               " waypoint(s); at least 2 are required");
+  }
+  for (size_t j = 0; j < path.waypoints.size(); ++j) {
+    space.Validate(path.waypoints[j], field + ".waypoints[" + std::to_string(j) + "]");
+    path.waypoints[j] = space.Normalize(path.waypoints[j]);
+  }
+  const double ds = space.Distance(path.waypoints.front(), node(start_id()).q);
+  if (ds > endpoint_tolerance) {
+    throw InputError(field + ".waypoints[0]", "path '" + path.name + "' starts " +
+                                                  std::to_string(ds) +
+                                                  " away from the H-Graph's start (tolerance " +
+                                                  std::to_string(endpoint_tolerance) + ")");
+  }
+  const double dg = space.Distance(path.waypoints.back(), node(goal_id()).q);
+  if (dg > endpoint_tolerance) {
+    throw InputError(field + ".waypoints[" + std::to_string(path.waypoints.size() - 1) + "]",
+                     "path '" + path.name + "' ends " + std::to_string(dg) +
+                         " away from the H-Graph's goal (tolerance " +
+                         std::to_string(endpoint_tolerance) + ")");
+  }
+  paths_.push_back(std::move(path));
+  AppendPath(space, num_paths() - 1, max_node_spacing);
+  return num_paths() - 1;
+}
+
+void HGraph::AppendPath(const Space& space, int p, double max_node_spacing) {
   path_nodes_.resize(paths_.size());
   path_edges_.resize(paths_.size());
-  for (size_t p = 0; p < paths_.size(); ++p) {
+  {
     const auto& waypoints = paths_[p].waypoints;
     std::vector<int>& ids = path_nodes_[p];
     const auto add_node = [&](HNode node) {
@@ -69,7 +104,7 @@ HGraph::HGraph(const Space& space, std::vector<InputPath> paths, double endpoint
     ids.push_back(start_id());
     for (size_t j = 0; j + 1 < waypoints.size(); ++j) {
       const int index = static_cast<int>(j);
-      if (j > 0) add_node(HNode{.q = waypoints[j], .path = static_cast<int>(p), .index = index});
+      if (j > 0) add_node(HNode{.q = waypoints[j], .path = p, .index = index});
       if (max_node_spacing <= 0) continue;
       const double length = space.Distance(waypoints[j], waypoints[j + 1]);
       const double parts = std::ceil(length / max_node_spacing);
@@ -85,7 +120,7 @@ HGraph::HGraph(const Space& space, std::vector<InputPath> paths, double endpoint
       for (int k = 1; k < static_cast<int>(parts); ++k) {
         const double t = k / parts;
         add_node(HNode{.q = space.Interpolate(waypoints[j], waypoints[j + 1], t),
-                       .path = static_cast<int>(p),
+                       .path = p,
                        .index = index,
                        .t = t});
       }
@@ -97,6 +132,12 @@ HGraph::HGraph(const Space& space, std::vector<InputPath> paths, double endpoint
       path_edges_[p].push_back(AddEdge(ids[j - 1], ids[j], /*input=*/true));
     }
   }
+}
+
+int HGraph::AddNode(const Config& q) {
+  nodes_.push_back(HNode{.q = q, .path = -1, .index = -1});
+  adjacency_.emplace_back();
+  return num_nodes() - 1;
 }
 
 int HGraph::AddEdge(int u, int v, bool input) {

@@ -57,6 +57,16 @@ class HGraph {
   HGraph(const Space& space, std::vector<InputPath> paths, double endpoint_tolerance,
          double max_node_spacing = 0);
 
+  // Adds one more path through the H-Graph's start and goal (validated as the constructor
+  // validates its paths; errors name `field`), its nodes subdivided as the constructor's, and
+  // its edges, unchecked. Returns its index. Bridges to it are the caller's.
+  int AddPath(const Space& space, InputPath path, double endpoint_tolerance,
+              double max_node_spacing, const std::string& field);
+
+  // Adds a node outside every input path (path = -1; the post-optimization's shortcut points)
+  // and returns its id.
+  int AddNode(const Config& q);
+
   int num_nodes() const { return static_cast<int>(nodes_.size()); }
   int num_edges() const { return static_cast<int>(edges_.size()); }
   int num_paths() const { return static_cast<int>(paths_.size()); }
@@ -81,6 +91,7 @@ class HGraph {
   int FindEdge(int u, int v) const;
 
  private:
+  void AppendPath(const Space& space, int p, double max_node_spacing);
   static constexpr int start_id() { return 0; }
   static constexpr int goal_id() { return 1; }
 

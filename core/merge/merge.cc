@@ -15,6 +15,7 @@
 #include "core/common/error.h"
 #include "core/common/parallel.h"
 #include "core/merge/path_check.h"
+#include "core/merge/shortcut.h"
 #include "core/search/search.h"
 
 namespace hgraph {
@@ -27,6 +28,10 @@ using Clock = std::chrono::steady_clock;
 // the counts do not depend on the thread count. On grid (three PRM inputs, all-pairs) batches of
 // 1, 2, 4 and 8 check 9654, 9661, 9665 and 9682 edges.
 constexpr int kLazyBatch = 8;
+
+// The automatic post-optimization's budget, and the gain below which a round ends it.
+constexpr double kAutomaticOptimizeMs = 2000;
+constexpr double kOptimizeMinGain = 1e-3;
 
 int ResolveThreads(int threads) {
   if (threads < 0) throw InputError("options.threads", "must be >= 0 (0 = all cores)");
@@ -265,6 +270,180 @@ EdgeBoundInput HybridizationSession::BoundInput(int e) {
                         .motion_bound = motion_bound_[e]};
 }
 
+void HybridizationSession::SyncEdgeData() {
+  const Space& space = checker_->space();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (int n = static_cast<int>(goal_distance_.size()); n < graph_.num_nodes(); ++n) {
+    goal_distance_.push_back(space.Distance(graph_.node(n).q, graph_.node(graph_.goal()).q));
+    node_clearance_.push_back(nan);
+  }
+  for (int e = static_cast<int>(edge_length_.size()); e < graph_.num_edges(); ++e) {
+    const HEdge& edge = graph_.edge(e);
+    edge_length_.push_back(space.Distance(graph_.node(edge.u).q, graph_.node(edge.v).q));
+    motion_bound_.push_back(nan);
+  }
+}
+
+SearchResult HybridizationSession::SearchBest(const Measure& measure, bool profile,
+                                              const ProgressCallback& progress,
+                                              const CancelToken& cancel, MergeResult* result,
+                                              int64_t* rechecked) {
+  SyncEdgeData();
+  const bool needs_clearance = measure.needs_clearance();
+  if (options_.evaluation == Evaluation::kLazy && measure.needs_node_clearance()) {
+    const Clock::time_point phase = Clock::now();
+    result->stats.node_clearances += ComputeNodeClearances(cancel);
+    result->timing.check_ms += MsSince(phase);
+  }
+  // How the search sees an edge: invalid ones not at all, checked ones (with a profile where the
+  // measure needs one) by their value, the others by the measure's bound.
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const ExactFn exact = [&](int e) {
+    const EdgeReport& report = graph_.edge(e).report;
+    return report.state == EdgeState::kInvalid ||
+           (report.state == EdgeState::kValid && (!needs_clearance || report.has_clearance));
+  };
+  const SearchEdgeFn see = [&](int e) {
+    const EdgeReport& report = graph_.edge(e).report;
+    if (report.state == EdgeState::kInvalid) {
+      return SearchEdge{.value = nan, .length = edge_length_[e]};
+    }
+    if (exact(e)) return SearchEdge{.value = measure.EdgeValue(report), .length = edge_length_[e]};
+    return SearchEdge{.value = measure.EdgeBound(BoundInput(e)), .length = edge_length_[e]};
+  };
+  std::vector<double> cost_to_go;
+  if (measure.cost_per_distance() > 0) {
+    cost_to_go.resize(graph_.num_nodes());
+    for (int n = 0; n < graph_.num_nodes(); ++n) {
+      cost_to_go[n] = measure.cost_per_distance() * goal_distance_[n];
+    }
+  }
+
+  // Lazy search: edges are seen through their bounds and checked only when the search would
+  // settle a node through them (core/search/search.h); eager evaluation has checked them all
+  // already. Then, with `profile`, the path's own edges get clearance profiles so that every
+  // measure can be reported; the clearance check refines between samples and can find a
+  // collision the validity check missed, and then the search runs again.
+  for (;;) {
+    Clock::time_point phase = Clock::now();
+    double checking_ms = 0;
+    LazySearchStats lazy;
+    const EvaluateFn evaluate = [&](const std::vector<int>& edges) {
+      const Clock::time_point checking = Clock::now();
+      CheckEdges(edges, needs_clearance, "check", progress, cancel, rechecked);
+      checking_ms += MsSince(checking);
+    };
+    SearchResult best =
+        FindBestPathLazy(graph_, measure, see, exact, evaluate,
+                         cost_to_go.empty() ? nullptr : &cost_to_go, kLazyBatch, &lazy);
+    result->stats.search_rounds += lazy.evaluations + 1;
+    result->timing.check_ms += checking_ms;
+    result->timing.search_ms += MsSince(phase) - checking_ms;
+    if (!best.found) {
+      if (measure.spec().type == MeasureType::kSafeLength) {
+        throw Error(
+            ErrorCode::kFailedPrecondition, "measure.safety",
+            "no path in the H-Graph keeps clearance >= " + std::to_string(measure.spec().safety));
+      }
+      throw Error(ErrorCode::kFailedPrecondition, "paths",
+                  "the valid edges of the H-Graph do not connect start and goal (are the "
+                  "inputs valid?)");
+    }
+    if (!profile) return best;
+    phase = Clock::now();
+    std::vector<int> output_recheck;
+    for (int e : best.edges) {
+      if (!graph_.edge(e).report.has_clearance) output_recheck.push_back(e);
+    }
+    CheckEdges(output_recheck, true, "evaluate", progress, cancel, rechecked);
+    result->timing.evaluate_ms += MsSince(phase);
+    bool still_valid = true;
+    for (int e : output_recheck) {
+      still_valid = still_valid && graph_.edge(e).report.state == EdgeState::kValid;
+    }
+    if (still_valid) return best;
+  }
+}
+
+SearchResult HybridizationSession::Optimize(const Measure& measure, SearchResult best,
+                                            const ProgressCallback& progress,
+                                            const CancelToken& cancel, MergeResult* result,
+                                            int64_t* rechecked) {
+  const MeasureType type = measure.spec().type;
+  if (options_.optimize_ms == 0 ||
+      (type != MeasureType::kLength && type != MeasureType::kSafeLength)) {
+    return best;
+  }
+  const Clock::time_point started = Clock::now();
+  const double budget_ms = options_.optimize_ms > 0 ? options_.optimize_ms : kAutomaticOptimizeMs;
+  const Space& space = checker_->space();
+  // Bridges from a shortcut's new points reach the nodes within the H-Graph's own scale.
+  const double reach =
+      build_stats_.radius > 0 ? build_stats_.radius : 2 * MeanInputEdgeLength(graph_, space);
+  double objective = measure.Objective(EvaluateEdges(graph_, best.edges, measure.spec().k));
+  SearchResult found = best;
+  for (int round = 1; MsSince(started) < budget_ms; ++round) {
+    cancel.ThrowIfStopped();
+    ShortcutRequest request{.path = {.name = "shortcut"},
+                            .seed = static_cast<uint64_t>(round),
+                            .safety = type == MeasureType::kSafeLength ? measure.spec().safety : 0};
+    for (int n : found.nodes) {
+      request.path.waypoints.push_back(graph_.node(n).q);
+      request.ids.push_back(n);
+    }
+    for (int e : found.edges) request.edges.push_back(graph_.edge(e).report);
+    const ShortcutResult shortcut = ShortcutCertified(*checker_, request, cancel);
+    *rechecked += shortcut.edges_checked;
+    ++result->stats.optimize_rounds;
+    if (shortcut.accepted == 0) break;
+    result->stats.shortcuts += shortcut.accepted;
+
+    // The shortcut path joins the H-Graph: its new points as nodes, its checked edges with their
+    // reports, unchecked bridges from the new points to the nodes near them.
+    std::vector<int> ids = shortcut.ids;
+    std::vector<int> fresh;
+    for (size_t j = 0; j < ids.size(); ++j) {
+      if (ids[j] >= 0) continue;
+      ids[j] = graph_.AddNode(shortcut.path.waypoints[j]);
+      fresh.push_back(ids[j]);
+    }
+    for (size_t j = 0; j + 1 < ids.size(); ++j) {
+      if (ids[j] == ids[j + 1]) continue;
+      const int e = graph_.AddEdge(ids[j], ids[j + 1], false);
+      if (graph_.edge(e).report.state == EdgeState::kUnchecked) {
+        graph_.mutable_edge(e).report = shortcut.edges[j];
+      }
+    }
+    for (int u : fresh) {
+      for (int v = 0; v < graph_.num_nodes(); ++v) {
+        if (v == u || space.Distance(graph_.node(u).q, graph_.node(v).q) > reach) continue;
+        graph_.AddEdge(u, v, false);
+      }
+    }
+    // Profiled, so that every objective streamed is that of a certified path.
+    SearchResult next = SearchBest(measure, /*profile=*/true, progress, cancel, result, rechecked);
+    const double next_objective =
+        measure.Objective(EvaluateEdges(graph_, next.edges, measure.spec().k));
+    const bool improved = next_objective < objective * (1 - kOptimizeMinGain);
+    if (next_objective < objective) {
+      found = std::move(next);
+      objective = next_objective;
+      if (progress) {
+        progress(Progress{.phase = "optimize",
+                          .done = round,
+                          .total = 0,
+                          .collision_checks = 0,
+                          .distance_queries = 0,
+                          .elapsed_ms = MsSince(started),
+                          .objective = objective});
+      }
+    }
+    if (!improved) break;
+  }
+  result->timing.optimize_ms += MsSince(started);
+  return found;
+}
+
 MergeResult HybridizationSession::Query(const MeasureSpec& spec, const ProgressCallback& progress,
                                         const CancelToken& cancel) {
   const std::unique_ptr<const Measure> measure = Measure::Make(spec);
@@ -304,81 +483,12 @@ MergeResult HybridizationSession::Query(const MeasureSpec& spec, const ProgressC
       }
     }
     CheckEdges(recheck, true, "clearance", progress, cancel, &rechecked);
-  } else if (measure->needs_node_clearance()) {
-    result.stats.node_clearances = ComputeNodeClearances(cancel);
   }
   result.timing.check_ms += MsSince(phase);
 
-  // How the search sees an edge: invalid ones not at all, checked ones (with a profile where the
-  // measure needs one) by their value, the others by the measure's bound.
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  const ExactFn exact = [&](int e) {
-    const EdgeReport& report = graph_.edge(e).report;
-    return report.state == EdgeState::kInvalid ||
-           (report.state == EdgeState::kValid && (!needs_clearance || report.has_clearance));
-  };
-  const SearchEdgeFn see = [&](int e) {
-    const EdgeReport& report = graph_.edge(e).report;
-    if (report.state == EdgeState::kInvalid)
-      return SearchEdge{.value = nan, .length = edge_length_[e]};
-    if (exact(e)) {
-      return SearchEdge{.value = measure->EdgeValue(report), .length = edge_length_[e]};
-    }
-    return SearchEdge{.value = measure->EdgeBound(BoundInput(e)), .length = edge_length_[e]};
-  };
-  std::vector<double> cost_to_go;
-  if (measure->cost_per_distance() > 0) {
-    cost_to_go.resize(graph_.num_nodes());
-    for (int n = 0; n < graph_.num_nodes(); ++n) {
-      cost_to_go[n] = measure->cost_per_distance() * goal_distance_[n];
-    }
-  }
-
-  // Lazy search: edges are seen through their bounds and checked only when the search would
-  // settle a node through them (core/search/search.h); eager evaluation has checked them all
-  // already. Then the output's own edges get
-  // clearance profiles so that every measure can be reported; the clearance check refines
-  // between samples and can find a collision the validity check missed, and then the search
-  // runs again.
-  SearchResult best;
-  double evaluate_ms = 0;
-  for (;;) {
-    phase = Clock::now();
-    double checking_ms = 0;
-    LazySearchStats lazy;
-    const EvaluateFn evaluate = [&](const std::vector<int>& edges) {
-      const Clock::time_point checking = Clock::now();
-      CheckEdges(edges, needs_clearance, "check", progress, cancel, &rechecked);
-      checking_ms += MsSince(checking);
-    };
-    best =
-        FindBestPathLazy(graph_, *measure, see, exact, evaluate,
-                         cost_to_go.empty() ? nullptr : &cost_to_go, kLazyBatch, &lazy);
-    result.stats.search_rounds += lazy.evaluations + 1;
-    result.timing.check_ms += checking_ms;
-    result.timing.search_ms += MsSince(phase) - checking_ms;
-    if (!best.found) {
-      if (spec.type == MeasureType::kSafeLength) {
-        throw Error(ErrorCode::kFailedPrecondition, "measure.safety",
-                    "no path in the H-Graph keeps clearance >= " + std::to_string(spec.safety));
-      }
-      throw Error(ErrorCode::kFailedPrecondition, "paths",
-                  "the valid edges of the H-Graph do not connect start and goal (are the "
-                  "inputs valid?)");
-    }
-    phase = Clock::now();
-    std::vector<int> output_recheck;
-    for (int e : best.edges) {
-      if (!graph_.edge(e).report.has_clearance) output_recheck.push_back(e);
-    }
-    CheckEdges(output_recheck, true, "evaluate", progress, cancel, &rechecked);
-    evaluate_ms += MsSince(phase);
-    bool still_valid = true;
-    for (int e : output_recheck) {
-      still_valid = still_valid && graph_.edge(e).report.state == EdgeState::kValid;
-    }
-    if (still_valid) break;
-  }
+  SearchResult best = SearchBest(*measure, /*profile=*/true, progress, cancel, &result, &rechecked);
+  result.hgraph_objective = measure->Objective(EvaluateEdges(graph_, best.edges, spec.k));
+  best = Optimize(*measure, std::move(best), progress, cancel, &result, &rechecked);
   phase = Clock::now();
   result.quality = EvaluateEdges(graph_, best.edges, spec.k);
   for (int n : best.nodes) {
@@ -450,7 +560,7 @@ MergeResult HybridizationSession::Query(const MeasureSpec& spec, const ProgressC
     result.inputs.push_back(std::move(report));
   }
   if (result.best_input >= 0) result.best_input_objective = measure->Objective(best_quality);
-  result.timing.evaluate_ms = evaluate_ms + MsSince(phase);
+  result.timing.evaluate_ms += MsSince(phase);
 
   const int64_t query_checks = checker_->total_collision_checks() - checks_before;
   const int64_t query_queries = checker_->total_distance_queries() - queries_before;

@@ -12,6 +12,7 @@
 #include "core/hgraph/bridge_candidates.h"
 #include "core/hgraph/hgraph.h"
 #include "core/measure/measure.h"
+#include "core/search/search.h"
 #include "core/motion/motion_checker.h"
 
 namespace hgraph {
@@ -38,6 +39,9 @@ struct MergeOptions {
   // (InputReport::checked). Always so with kEager. Lazy evaluation otherwise reports what its
   // search checked.
   bool report_inputs = false;
+  // Anytime post-optimization budget in ms (see merge.proto MergeOptions.optimize_ms): < 0
+  // automatic, 0 off.
+  double optimize_ms = -1;
   double endpoint_tolerance = 1e-6;
   int threads = 0;  // worker threads; 0 = all cores
   // > 0: input edges longer than this are subdivided in the H-Graph (see HGraph); 0 = off.
@@ -84,9 +88,11 @@ struct MergeStats {
   int64_t edges_valid = 0;    // valid edges in the graph
   int64_t collision_checks = 0;
   int64_t distance_queries = 0;
-  int64_t edges_reused = 0;  // edges whose stored report served this query
-  int64_t search_rounds = 0;     // searches run (lazy: one per batch of checks, plus the last)
-  int64_t node_clearances = 0;   // node clearances computed for the lazy bounds
+  int64_t edges_reused = 0;     // edges whose stored report served this query
+  int64_t search_rounds = 0;    // searches run (lazy: one per batch of checks, plus the last)
+  int64_t node_clearances = 0;  // node clearances computed for the lazy bounds
+  int64_t optimize_rounds = 0;  // post-optimization rounds
+  int64_t shortcuts = 0;        // shortcuts the post-optimization accepted
   int threads = 0;
   int alignments = 0;
   double radius = 0;
@@ -102,6 +108,7 @@ struct MergeTiming {
   double check_ms = 0;
   double search_ms = 0;
   double evaluate_ms = 0;
+  double optimize_ms = 0;  // the post-optimization, inside total_ms
   double total_ms = 0;
 };
 
@@ -119,6 +126,7 @@ struct MergeResult {
   int best_input = -1;
   double objective = 0;
   double best_input_objective = 0;
+  double hgraph_objective = 0;  // the H-Graph optimum, before the post-optimization
 };
 
 // An H-Graph built once and searched under any number of measures. Not thread safe: callers
@@ -152,6 +160,16 @@ class HybridizationSession {
   int64_t ComputeNodeClearances(const CancelToken& cancel);
   // What the search knows of edge e before its check.
   EdgeBoundInput BoundInput(int e);
+  // Extends the per-node and per-edge data to nodes and edges added since.
+  void SyncEdgeData();
+  // The best path under `measure` with every edge checked; with `profile`, every edge also
+  // carries its clearance profile (which can find a collision a sampled check missed; then the
+  // search runs again). Adds to the result's stats and timing.
+  SearchResult SearchBest(const Measure& measure, bool profile, const ProgressCallback& progress,
+                          const CancelToken& cancel, MergeResult* result, int64_t* rechecked);
+  // The anytime post-optimization of `best` (MergeOptions.optimize_ms).
+  SearchResult Optimize(const Measure& measure, SearchResult best, const ProgressCallback& progress,
+                        const CancelToken& cancel, MergeResult* result, int64_t* rechecked);
 
   const MotionChecker* checker_;
   MergeOptions options_;
@@ -159,10 +177,10 @@ class HybridizationSession {
   MergeStats build_stats_;
   MergeTiming build_timing_;
   bool first_query_ = true;
-  std::vector<double> edge_length_;    // per edge: Space::Distance of its ends
-  std::vector<double> motion_bound_;   // per edge: MotionChecker::MotionBound, NaN until needed
+  std::vector<double> edge_length_;     // per edge: Space::Distance of its ends
+  std::vector<double> motion_bound_;    // per edge: MotionChecker::MotionBound, NaN until needed
   std::vector<double> node_clearance_;  // per node: clearance, NaN until needed
-  std::vector<double> goal_distance_;  // per node: Space::Distance to the goal
+  std::vector<double> goal_distance_;   // per node: Space::Distance to the goal
 };
 
 // Build + one query.
