@@ -198,11 +198,17 @@ void PrintMergeTable(const MergeResult& r) {
     }
   }
   if (unchecked) {
-    std::printf("  * not every edge checked (lazy evaluation): length only; --report-inputs "
-                "checks them all\n");
+    std::printf(
+        "  * not every edge checked (lazy evaluation): length only; --report-inputs "
+        "checks them all\n");
   }
   std::printf("measure %s (%s variant): objective %s", MeasureTypeName(r.measure.type),
               VariantName(r.variant), Cell(r.objective, 0).c_str());
+  if (r.stats.optimize_rounds > 0) {
+    std::printf(" (H-Graph optimum %s, %lld shortcuts in %lld rounds)",
+                Cell(r.hgraph_objective, 0).c_str(), static_cast<long long>(r.stats.shortcuts),
+                static_cast<long long>(r.stats.optimize_rounds));
+  }
   if (r.best_input >= 0 && r.best_input < static_cast<int>(r.inputs.size())) {
     std::printf(", best input '%s' %s", r.inputs[r.best_input].name.c_str(),
                 Cell(r.best_input_objective, 0).c_str());
@@ -222,9 +228,9 @@ void PrintMergeTable(const MergeResult& r) {
   const MergeTiming& t = r.timing;
   std::printf(
       "timing (ms): validate %.1f, inputs %.1f, align %.1f, candidates %.1f, check %.1f, "
-      "search %.1f, evaluate %.1f, total %.1f\n",
+      "search %.1f, evaluate %.1f, optimize %.1f, total %.1f\n",
       t.validate_ms, t.inputs_ms, t.align_ms, t.candidates_ms, t.check_ms, t.search_ms,
-      t.evaluate_ms, t.total_ms);
+      t.evaluate_ms, t.optimize_ms, t.total_ms);
 }
 
 }  // namespace hgraph::cli

@@ -36,6 +36,7 @@ struct MergeFlags {
   double endpoint_tolerance = 0;
   double max_node_spacing = 0;
   std::string evaluation = "lazy";
+  double optimize_ms = -1;
   bool report_inputs = false;
   int threads = 0;
   bool quiet = false;
@@ -50,6 +51,7 @@ struct MergeFlags {
   CLI::Option* resolution_opt = nullptr;
   CLI::Option* endpoint_tolerance_opt = nullptr;
   CLI::Option* max_node_spacing_opt = nullptr;
+  CLI::Option* optimize_ms_opt = nullptr;
 };
 
 // The proto fields each flag fills, so that errors name the flag as well.
@@ -65,6 +67,7 @@ const std::map<std::string, std::string>& FlagNames() {
       {"options.threads", "--threads"},
       {"options.endpoint_tolerance", "--endpoint-tolerance"},
       {"options.max_node_spacing", "--max-node-spacing"},
+      {"options.optimize_ms", "--optimize-ms"},
   };
   return names;
 }
@@ -88,6 +91,7 @@ void BuildProtos(const MergeFlags& f, v1::Measure* measure, v1::MergeOptions* op
                               ? v1::EVALUATION_EAGER
                               : v1::EVALUATION_LAZY);
   options->set_report_inputs(f.report_inputs);
+  if (f.optimize_ms_opt->count() > 0) options->set_optimize_ms(f.optimize_ms);
   options->set_threads(f.threads);
 }
 
@@ -177,6 +181,10 @@ Subcommand AddMergeCommand(CLI::App& parent) {
                   "lazy: check only the edges of the paths the search would take; eager: check "
                   "every candidate first")
       ->capture_default_str();
+  f.optimize_ms_opt = app->add_option(
+      "--optimize-ms", f.optimize_ms,
+      "Budget of the post-optimization (certified shortcuts re-hybridized, length and "
+      "safe-length), ms; 0 = off (default: automatic, until a round gains < 0.1%, <= 2000 ms)");
   app->add_flag("--report-inputs", f.report_inputs,
                 "Check every input edge with its clearance, so every input is fully reported "
                 "(always so with --evaluation eager)");

@@ -27,8 +27,12 @@ struct PlanFlags {
 
 const std::map<std::string, std::string>& FlagNames() {
   static const std::map<std::string, std::string> names = {
-      {"planner", "--planner"}, {"count", "--count"},           {"time_s", "--time"},
-      {"start", "--scene"},     {"goal", "--scene"},            {"resolution", "--resolution"},
+      {"planner", "--planner"},
+      {"count", "--count"},
+      {"time_s", "--time"},
+      {"start", "--scene"},
+      {"goal", "--scene"},
+      {"resolution", "--resolution"},
       {"scene.resolution", "--scene"},
   };
   return names;
@@ -70,8 +74,8 @@ int RunPlan(const PlanFlags& f) {
   int found = 0;
   std::string missing;
   for (const PlanAttempt& a : result.attempts) {
-    const std::string name = std::string(PlannerTypeName(request.planner)) + "-" +
-                             std::to_string(a.index);
+    const std::string name =
+        std::string(PlannerTypeName(request.planner)) + "-" + std::to_string(a.index);
     if (a.found) {
       ++found;
       std::printf("%-16s %-36.36s %10.1f %9d %12s %9s\n", name.c_str(), a.status.c_str(),
@@ -90,8 +94,7 @@ int RunPlan(const PlanFlags& f) {
               PlannerTypeName(request.planner), f.time_s, static_cast<unsigned long long>(f.seed),
               write ? "; wrote " : "", write ? f.out.c_str() : "");
   if (found < f.count) {
-    std::fprintf(stderr,
-                 "error: %s found no path within %g s in %d of %d runs (index %s); %s\n",
+    std::fprintf(stderr, "error: %s found no path within %g s in %d of %d runs (index %s); %s\n",
                  PlannerTypeName(request.planner), f.time_s, f.count - found, f.count,
                  missing.c_str(),
                  found > 0 ? "the paths found were written" : "no path was written");
@@ -106,13 +109,13 @@ Subcommand AddPlanCommand(CLI::App& parent) {
   auto flags = std::make_shared<PlanFlags>();
   PlanFlags& f = *flags;
   CLI::App* app = parent.add_subcommand(
-      "plan", "Plan input paths for the scene's start and goal with an OMPL planner; every path "
-              "is checked with the scene's local planner. Exit 1 if fewer than --count were "
-              "found in time (those found are still written).");
+      "plan",
+      "Plan input paths for the scene's start and goal with an OMPL planner; every path "
+      "is checked with the scene's local planner. Exit 1 if fewer than --count were "
+      "found in time (those found are still written).");
   app->add_option("--scene", f.scene, "Scene JSON (hgraph.v1.Scene) with start and goal")
       ->required();
-  app->add_option("--out", f.out,
-                  "Write the paths here (.json: PathSet; otherwise OMPL text)");
+  app->add_option("--out", f.out, "Write the paths here (.json: PathSet; otherwise OMPL text)");
   app->add_option("--planner", f.planner,
                   "prm (no cycles, as the paper), prm-cycles, prmstar, rrt, rrtconnect, lazyprm")
       ->capture_default_str();

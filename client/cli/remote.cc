@@ -307,12 +307,13 @@ int RunRemoteMerge(CLI::App* app, const RemoteOptions& remote) {
     if (Given(app, "--max-node-spacing")) {
       options->set_max_node_spacing(Flag<double>(app, "--max-node-spacing", 0));
     }
-    options->set_evaluation(
-        ParseEvaluation(Flag<std::string>(app, "--evaluation", "lazy"), "--evaluation") ==
-                Evaluation::kEager
-            ? v1::EVALUATION_EAGER
-            : v1::EVALUATION_LAZY);
+    options->set_evaluation(ParseEvaluation(Flag<std::string>(app, "--evaluation", "lazy"),
+                                            "--evaluation") == Evaluation::kEager
+                                ? v1::EVALUATION_EAGER
+                                : v1::EVALUATION_LAZY);
     options->set_report_inputs(Flag<bool>(app, "--report-inputs", false));
+    if (Given(app, "--optimize-ms"))
+      options->set_optimize_ms(Flag<double>(app, "--optimize-ms", 0));
     options->set_threads(Flag<int>(app, "--threads", 0));
     // The resolution the server will use, for --shortcut here.
     resolution = ResolutionFromProto(*options, scene);

@@ -11,17 +11,19 @@
 namespace hgraph::cli {
 
 Subcommand AddRequeryCommand(CLI::App& parent) {
-  CLI::App* app = parent.add_subcommand(
-      "requery", "Search an H-Graph kept by hgraph-server under another measure (no new "
-                 "collision checks where stored clearance profiles suffice)");
+  CLI::App* app =
+      parent.add_subcommand("requery",
+                            "Search an H-Graph kept by hgraph-server under another measure (no new "
+                            "collision checks where stored clearance profiles suffice)");
   auto flags = std::make_shared<RemoteOptions>();
   auto hgraph = std::make_shared<std::string>();
   auto out = std::make_shared<std::string>();
   app->add_option("--server", flags->server, "hgraph-server at HOST:PORT")->required();
   app->add_option("--hgraph", *hgraph, "H-Graph name from a merge (sessions/<id>/hgraphs/<n>)")
       ->required();
-  app->add_option("--measure", "Measure: length, inverse-clearance, bottleneck-clearance, "
-                               "safe-length")
+  app->add_option("--measure",
+                  "Measure: length, inverse-clearance, bottleneck-clearance, "
+                  "safe-length")
       ->default_val("length");
   app->add_option("--k", "Inverse-clearance exponent (default 3)");
   app->add_option("--safety", "Minimum clearance C for safe-length");

@@ -270,6 +270,55 @@ EdgeBoundInput HybridizationSession::BoundInput(int e) {
                         .motion_bound = motion_bound_[e]};
 }
 
+int64_t HybridizationSession::AddPaths(const std::vector<InputPath>& paths,
+                                       const ProgressCallback& progress,
+                                       const CancelToken& cancel) {
+  const Space& space = checker_->space();
+  if (paths.empty()) throw InputError("paths", "at least one path is required");
+  // Validate every path before the H-Graph changes.
+  {
+    HGraph probe = graph_;
+    for (size_t i = 0; i < paths.size(); ++i) {
+      probe.AddPath(space, paths[i], options_.endpoint_tolerance, options_.max_node_spacing,
+                    "paths[" + std::to_string(i) + "]");
+    }
+  }
+  const double reach = options_.candidates.variant == Variant::kAllPairs
+                           ? std::numeric_limits<double>::infinity()
+                       : build_stats_.radius > 0 ? build_stats_.radius
+                                                 : 2 * MeanInputEdgeLength(graph_, space);
+  const int first_edge = graph_.num_edges();
+  std::vector<int> input_edges;
+  std::vector<int> bridges;
+  for (size_t i = 0; i < paths.size(); ++i) {
+    const int before = graph_.num_nodes();
+    const int p = graph_.AddPath(space, paths[i], options_.endpoint_tolerance,
+                                 options_.max_node_spacing, "paths[" + std::to_string(i) + "]");
+    for (int e : graph_.path_edges(p)) {
+      if (e >= first_edge) input_edges.push_back(e);
+    }
+    for (int u = before; u < graph_.num_nodes(); ++u) {
+      for (int v = 0; v < u; ++v) {
+        if (space.Distance(graph_.node(u).q, graph_.node(v).q) > reach) continue;
+        const int e = graph_.AddEdge(u, v, false);
+        if (e >= first_edge && !graph_.edge(e).input) bridges.push_back(e);
+      }
+    }
+  }
+  std::sort(bridges.begin(), bridges.end());
+  bridges.erase(std::unique(bridges.begin(), bridges.end()), bridges.end());
+  SyncEdgeData();
+  build_stats_.nodes = graph_.num_nodes();
+  build_stats_.input_edges += static_cast<int64_t>(input_edges.size());
+  build_stats_.candidate_edges += static_cast<int64_t>(bridges.size());
+  if (options_.evaluation == Evaluation::kEager) {
+    int64_t checked = 0;
+    CheckEdges(input_edges, true, "inputs", progress, cancel, &checked);
+    CheckEdges(bridges, false, "check", progress, cancel, &checked);
+  }
+  return static_cast<int64_t>(bridges.size());
+}
+
 void HybridizationSession::SyncEdgeData() {
   const Space& space = checker_->space();
   const double nan = std::numeric_limits<double>::quiet_NaN();

@@ -12,8 +12,8 @@
 #include "core/hgraph/bridge_candidates.h"
 #include "core/hgraph/hgraph.h"
 #include "core/measure/measure.h"
-#include "core/search/search.h"
 #include "core/motion/motion_checker.h"
+#include "core/search/search.h"
 
 namespace hgraph {
 
@@ -143,6 +143,15 @@ class HybridizationSession {
   // Throws InputError for a bad measure and Error(kFailedPrecondition) if no path satisfies it.
   MergeResult Query(const MeasureSpec& measure, const ProgressCallback& progress = {},
                     const CancelToken& cancel = {});
+
+  // Adds input paths to the H-Graph (AddPaths): their nodes (subdivided as the first inputs),
+  // their edges, and bridge candidates from every new node to every node added before it (its own
+  // path's too: all of them for all-pairs, else those within the H-Graph's radius), all unchecked;
+  // checked reports are kept. Eager evaluation checks the new edges at once. The next Query reports
+  // the new inputs too. Throws InputError naming "paths[i]..." (i counted from 0 in `paths`) for a
+  // bad path. Returns the number of bridge candidates added.
+  int64_t AddPaths(const std::vector<InputPath>& paths, const ProgressCallback& progress = {},
+                   const CancelToken& cancel = {});
 
   const HGraph& graph() const { return graph_; }
   const MergeStats& build_stats() const { return build_stats_; }

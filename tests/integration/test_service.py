@@ -135,11 +135,13 @@ def test_health_and_reflection(server):
 
 def test_merge_streams_progress_then_requery_reuses_checks(client):
     events = []
+    # Eager: every edge checked with its profile up front, so later measures need no new work.
     merged = client.merge(input_paths(), measure="inverse-clearance", variant="all-pairs",
-                          on_progress=events.append, progress_interval_ms=1)
+                          evaluation="eager", optimize_ms=0, on_progress=events.append,
+                          progress_interval_ms=1)
     assert merged.progress_events >= 1 and events
     assert {e.phase for e in events} <= {"validate", "inputs", "align", "candidates", "check",
-                                         "clearance", "search", "evaluate"}
+                                         "clearance", "search", "evaluate", "optimize"}
     result = merged.result
     assert merged.hgraph.startswith(client.session + "/hgraphs/")
     assert result.quality.length <= min(i.quality.length for i in result.inputs if i.valid)
@@ -156,11 +158,27 @@ def test_merge_streams_progress_then_requery_reuses_checks(client):
 
 
 def test_requery_computes_missing_profiles_once(client):
-    merged = client.merge(input_paths(), measure="length", variant="all-pairs")
+    merged = client.merge(input_paths(), measure="length", variant="all-pairs",
+                          evaluation="eager", optimize_ms=0)
     first = client.requery(merged.hgraph, "inverse-clearance")
     assert first.stats.distance_queries > 0  # length needed no profiles; they are made now
     second = client.requery(merged.hgraph, "bottleneck-clearance")
     assert second.stats.collision_checks == 0 and second.stats.distance_queries == 0
+
+
+def test_lazy_requery_profiles_only_what_its_search_wants(client):
+    # A bottleneck re-query after a length merge: eager profiles every valid edge, lazy the
+    # nodes and the edges its search settles through. Same widest path either way.
+    results = {}
+    for evaluation in ("eager", "lazy"):
+        merged = client.merge(input_paths(), measure="length", variant="all-pairs",
+                              evaluation=evaluation, optimize_ms=0)
+        results[evaluation] = client.requery(merged.hgraph, "bottleneck-clearance")
+    eager, lazy = results["eager"], results["lazy"]
+    assert lazy.objective == pytest.approx(eager.objective, rel=1e-9)
+    assert lazy.quality.length == pytest.approx(eager.quality.length, rel=1e-9)
+    assert 0 < lazy.stats.distance_queries < eager.stats.distance_queries
+    assert lazy.stats.node_clearances > 0
 
 
 def test_upload_chunked_blob_and_mesh_scene(server):
@@ -411,8 +429,8 @@ def test_sequential_calls_with_one_admission_slot_are_never_busy():
             digest = c.upload_scene(DATA / "scene.json")
             for _ in range(25):
                 c.create_session(digest)
-                result = c.merge(input_paths(), variant="edit-distance")
-                assert c.requery(result.hgraph, "length").stats.collision_checks == 0
+                result = c.merge(input_paths(), variant="edit-distance", optimize_ms=0)
+                assert c.requery(result.hgraph, "length").stats.edges_reused > 0
     finally:
         assert s.stop() == 0, "".join(s.log)
 
@@ -424,7 +442,8 @@ def test_eviction_under_a_small_budget_gives_not_found(server):
         with s.client() as c:
             c.create_session(c.upload_scene(DATA / "scene.json"))
             first_session = c.session
-            first = c.merge(input_paths(), variant="all-pairs", measure="inverse-clearance")
+            first = c.merge(input_paths(), variant="all-pairs", measure="inverse-clearance",
+                            evaluation="eager")
             assert first.hgraph
             # A second scene and its H-Graph push the first scene's entries out.
             scene = scene_pb2.Scene()
@@ -432,7 +451,8 @@ def test_eviction_under_a_small_budget_gives_not_found(server):
             json_format.Parse((DATA / "scene.json").read_text(), scene)
             scene.description = "another scene"
             c.create_session(c.upload_scene(scene))
-            second = c.merge(input_paths(), variant="all-pairs", measure="inverse-clearance")
+            second = c.merge(input_paths(), variant="all-pairs", measure="inverse-clearance",
+                             evaluation="eager", optimize_ms=0)
             assert second.hgraph
             assert s.metric("hgraph_cache_bytes") <= budget
             assert s.metric("hgraph_cache_evictions_total") > 0
@@ -463,7 +483,9 @@ def test_sigterm_drains_then_cancels_in_flight_merge_after_grace_and_exits_0():
         c.create_session(c.upload_scene(DATA / "scene.json"))
         request = service_pb2.MergePathsRequest(
             session=c.session, paths=hgraph_client.make_paths(densified(40)),
-            options=merge_pb2.MergeOptions(variant=merge_pb2.VARIANT_ALL_PAIRS))
+            # Eager: every candidate checked, a merge long enough to be in flight at SIGTERM.
+            options=merge_pb2.MergeOptions(variant=merge_pb2.VARIANT_ALL_PAIRS,
+                                           evaluation=merge_pb2.EVALUATION_EAGER))
         call = c.merge_stream(request, timeout=60)
         next(call)
         started = time.monotonic()
@@ -493,7 +515,8 @@ def run_cli(*args, timeout=120):
 def test_cli_remote_merge_requery_plan(server, tmp_path):
     merged = run_cli("merge", "--server", server.target, "--scene", str(DATA / "scene.json"),
                      "--paths", str(DATA / "paths.txt"), "--measure", "inverse-clearance",
-                     "--variant", "all-pairs", "--out", str(tmp_path / "result.json"))
+                     "--variant", "all-pairs", "--evaluation", "eager",
+                     "--out", str(tmp_path / "result.json"))
     assert merged.returncode == 0, merged.stderr
     assert "session sessions/" in merged.stderr
     # Not a terminal: plain progress lines, no carriage-return redraws.

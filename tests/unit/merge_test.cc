@@ -178,8 +178,7 @@ TEST_P(MergePropertyTest, EveryVariantAndMeasureKeepsTheInvariants) {
       if (variant == Variant::kAllPairs) {
         all_pairs_objective = eager.hgraph_objective;
       } else {
-        EXPECT_LE(all_pairs_objective, eager.hgraph_objective + 1e-9)
-            << "all-pairs is never worse";
+        EXPECT_LE(all_pairs_objective, eager.hgraph_objective + 1e-9) << "all-pairs is never worse";
       }
     }
   }
@@ -363,6 +362,37 @@ TEST_F(MergeTest, PostOptimizationShortensWithCertifiedMotionsAndStreamsEachImpr
     }
   }
   EXPECT_TRUE(made);
+}
+
+TEST_F(MergeTest, AddPathsGrowsTheHGraphLikeMergingEverythingAtOnce) {
+  const LocalPlanner planner = MakePlanner();
+  const std::vector<InputPath> inputs = PerturbedPaths(planner, 7, 3);
+  const MergeOptions options{.candidates = {.variant = Variant::kAllPairs}, .optimize_ms = 0};
+  HybridizationSession grown(planner, MergeRequest{.paths = {inputs[0]}, .options = options});
+  const MergeResult alone = grown.Query({});
+  ASSERT_EQ(alone.inputs.size(), 1u);
+  EXPECT_GT(grown.AddPaths({inputs[1], inputs[2]}), 0);
+  const MergeResult after = grown.Query({});
+  const MergeResult together = Merge(planner, MergeRequest{.paths = inputs, .options = options});
+  ASSERT_EQ(after.inputs.size(), 3u);
+  EXPECT_EQ(after.inputs[2].name, inputs[2].name);
+  EXPECT_EQ(after.stats.nodes, together.stats.nodes);
+  // All-pairs either way: the same candidates, so the same optimum, and what the first query
+  // checked is not checked again.
+  EXPECT_NEAR(after.objective, together.objective, 1e-9 * together.objective);
+  EXPECT_LE(after.objective, alone.objective + 1e-9);
+  EXPECT_GT(after.stats.edges_reused, 0);
+  // A path that does not share the start is refused with its field named, and the H-Graph
+  // is unchanged.
+  InputPath stray = inputs[1];
+  stray.waypoints.front() += Eigen::Vector2d(1.0, 0.0);
+  try {
+    grown.AddPaths({inputs[2], stray});
+    FAIL() << "expected an InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "paths[1].waypoints[0]");
+  }
+  EXPECT_EQ(grown.Query({}).stats.nodes, after.stats.nodes);
 }
 
 TEST_F(MergeTest, CancelStopsTheMerge) {

@@ -247,6 +247,7 @@ class Client:
               variant: Optional[str] = None, options: Optional[merge_pb2.MergeOptions] = None,
               max_node_spacing: Optional[float] = None,
               evaluation: Optional[str] = None, report_inputs: Optional[bool] = None,
+              optimize_ms: Optional[float] = None,
               session: Optional[str] = None,
               on_progress: Optional[Callable[[Progress], None]] = None,
               progress_interval_ms: int = 0, seed: int = 0,
@@ -256,7 +257,8 @@ class Client:
         `max_node_spacing` subdivides long input edges in the H-Graph so that bridges can leave
         an input mid-edge (MergeOptions.max_node_spacing). `evaluation` is "lazy" (the default:
         only the edges the search wants are checked) or "eager"; `report_inputs` checks every
-        input edge so that every input report is complete (InputReport.checked)."""
+        input edge so that every input report is complete (InputReport.checked); `optimize_ms`
+        bounds the post-optimization (0 = off; unset = automatic)."""
         opts = merge_pb2.MergeOptions()
         if options is not None:
             opts.CopyFrom(options)
@@ -268,6 +270,8 @@ class Client:
             opts.evaluation = EVALUATIONS[evaluation]
         if report_inputs is not None:
             opts.report_inputs = report_inputs
+        if optimize_ms is not None:
+            opts.optimize_ms = optimize_ms
         request = service_pb2.MergePathsRequest(
             session=session or self.session or "", paths=make_paths(paths),
             measure=make_measure(measure, k, safety), options=opts, seed=seed,
