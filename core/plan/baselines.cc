@@ -36,6 +36,23 @@ InputPath ShortcutPath(const MotionChecker& checker, const InputPath& path,
   return out;
 }
 
+InputPath SimplifyMaxPath(const MotionChecker& checker, const InputPath& path,
+                          const SimplifyMaxOptions& options) {
+  const Space& space = checker.space();
+  ValidatePath(space, path, "path");
+  QuietOmplLogging();
+  auto lock = LockOmplRandomness();
+  SeedOmpl(options.seed);
+  const ob::SpaceInformationPtr si = MakeSpaceInformation(checker, options.resolution);
+  og::PathGeometric omplPath = ToOmplPath(si, space, path);
+  og::PathSimplifier simplifier(si);
+  simplifier.simplifyMax(omplPath);
+  InputPath out = FromOmplPath(space, omplPath, path.name);
+  out.waypoints.front() = path.waypoints.front();
+  out.waypoints.back() = path.waypoints.back();
+  return out;
+}
+
 InputPath OmplHybridize(const MotionChecker& checker, const std::vector<InputPath>& paths,
                         const OmplHybridizationOptions& options) {
   const Space& space = checker.space();

@@ -26,6 +26,18 @@ struct ShortcutOptions {
 InputPath ShortcutPath(const MotionChecker& checker, const InputPath& path,
                        const ShortcutOptions& options = {});
 
+struct SimplifyMaxOptions {
+  uint64_t seed = 1;
+  double resolution = 0.01;
+};
+
+// OMPL's PathSimplifier::simplifyMax on one path: OMPL's full simplification (reduceVertices,
+// shortcutPath, collapseCloseVertices, B-spline smoothing, repeated while it improves) without a
+// time limit, the pipeline OMPL users run after PathHybridization. Keeps start and goal; every
+// new edge is checked with `checker` at OMPL's discretisation. Throws InputError as ShortcutPath.
+InputPath SimplifyMaxPath(const MotionChecker& checker, const InputPath& path,
+                          const SimplifyMaxOptions& options = {});
+
 struct OmplHybridizationOptions {
   double resolution = kDefaultResolution;
   // OMPL's recordPath(..., matchAcrossGaps): also bridge the ends of unmatched stretches.

@@ -1,0 +1,600 @@
+// hgraph against the pipeline OMPL users run today, side by side in one run (issue 10, item 5).
+// For every scene: fixed PRM inputs (planned once with a fixed seed and written to --out, or read
+// back from there), fed identically to every method; the methods alternate run by run and the
+// figures are medians over --runs. Every output is certified by our own CheckPaths. Writes
+// results.json, results.md and results.svg to --out. Never asserts: see README.md.
+#include <CLI/CLI.hpp>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "core/adapter/path_io.h"
+#include "core/adapter/scene_proto.h"
+#include "core/collision/collision_world.h"
+#include "core/common/error.h"
+#include "core/merge/merge.h"
+#include "core/merge/path_check.h"
+#include "core/motion/local_planner.h"
+#include "core/plan/baselines.h"
+#include "core/plan/plan.h"
+
+namespace hgraph {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Counts the edge checks the methods ask for (OMPL's motion validator, the H-Graph's local
+// planner runs) on top of the wrapped checker's query totals. Thread safe as the wrapped one.
+class CountingChecker final : public MotionChecker {
+ public:
+  explicit CountingChecker(const MotionChecker& inner) : inner_(inner) {}
+  const Space& space() const override { return inner_.space(); }
+  EdgeReport CheckEdge(const EdgeCheckRequest& request) const override {
+    edges_.fetch_add(1, std::memory_order_relaxed);
+    return inner_.CheckEdge(request);
+  }
+  bool IsValid(const Config& q) const override { return inner_.IsValid(q); }
+  double Clearance(const Config& q) const override { return inner_.Clearance(q); }
+  double MotionBound(const Config& a, const Config& b) const override {
+    return inner_.MotionBound(a, b);
+  }
+  int64_t total_collision_checks() const override { return inner_.total_collision_checks(); }
+  int64_t total_distance_queries() const override { return inner_.total_distance_queries(); }
+  int64_t edges() const { return edges_.load(); }
+
+ private:
+  const MotionChecker& inner_;
+  mutable std::atomic<int64_t> edges_{0};
+};
+
+struct Problem {
+  std::string name;
+  std::string file;
+  std::shared_ptr<const Scene> scene;
+  std::shared_ptr<const CollisionWorld> world;
+  std::unique_ptr<LocalPlanner> planner;
+  double resolution = 0.01;
+  std::vector<InputPath> inputs;
+  std::vector<double> input_lengths;
+  int best_input = 0;
+};
+
+// What one method returns: its path, and the engine's own figures where it has them.
+struct Output {
+  InputPath path;
+  double objective = NAN;         // the method's own objective (hgraph), NaN otherwise
+  double hgraph_objective = NAN;  // H-Graph optimum before post-optimization, when reported
+  int64_t search_rounds = -1;
+  int64_t engine_edges_checked = -1;
+};
+
+struct Method {
+  std::string name;
+  std::string label;  // for tables and the chart
+  bool ompl = false;  // counts towards "best certified OMPL"
+  std::function<Output(const MotionChecker&, const Problem&)> run;
+};
+
+struct Run {
+  bool ok = false;
+  std::string error;
+  double ms = 0;
+  double length = NAN;
+  double objective = NAN;
+  double hgraph_objective = NAN;
+  double min_clearance = NAN;
+  double inverse_clearance = NAN;
+  bool valid = false;
+  bool certified = false;
+  int64_t collision_checks = 0;
+  int64_t distance_queries = 0;
+  int64_t edges_checked = 0;
+  int64_t search_rounds = -1;
+  int64_t certify_checks = 0;  // collision checks + distance queries to certify the output alone
+};
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return NAN;
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+struct Summary {
+  std::string method;
+  std::string label;
+  bool ompl = false;
+  int runs_ok = 0;
+  std::string error;
+  bool certified = false;  // every run certified
+  double ms = NAN, length = NAN, objective = NAN, hgraph_objective = NAN, min_clearance = NAN,
+         inverse_clearance = NAN, collision_checks = NAN, distance_queries = NAN,
+         edges_checked = NAN, search_rounds = NAN, certify_checks = NAN, limit_ratio = NAN;
+};
+
+Summary Summarize(const Method& m, const std::vector<Run>& runs) {
+  Summary s{.method = m.name, .label = m.label, .ompl = m.ompl};
+  std::map<std::string, std::vector<double>> f;
+  s.certified = !runs.empty();
+  for (const Run& r : runs) {
+    if (!r.ok) {
+      s.error = r.error;
+      s.certified = false;
+      continue;
+    }
+    ++s.runs_ok;
+    s.certified = s.certified && r.certified;
+    f["ms"].push_back(r.ms);
+    f["length"].push_back(r.length);
+    f["objective"].push_back(r.objective);
+    f["hgraph_objective"].push_back(r.hgraph_objective);
+    f["min_clearance"].push_back(r.min_clearance);
+    f["inverse_clearance"].push_back(r.inverse_clearance);
+    f["cc"].push_back(static_cast<double>(r.collision_checks));
+    f["dq"].push_back(static_cast<double>(r.distance_queries));
+    f["edges"].push_back(static_cast<double>(r.edges_checked));
+    f["rounds"].push_back(static_cast<double>(r.search_rounds));
+    f["certify"].push_back(static_cast<double>(r.certify_checks));
+    f["ratio"].push_back(static_cast<double>(r.collision_checks + r.distance_queries) /
+                         static_cast<double>(std::max<int64_t>(1, r.certify_checks)));
+  }
+  if (s.runs_ok == 0) return s;
+  s.ms = Median(f["ms"]);
+  s.length = Median(f["length"]);
+  s.objective = Median(f["objective"]);
+  s.hgraph_objective = Median(f["hgraph_objective"]);
+  s.min_clearance = Median(f["min_clearance"]);
+  s.inverse_clearance = Median(f["inverse_clearance"]);
+  s.collision_checks = Median(f["cc"]);
+  s.distance_queries = Median(f["dq"]);
+  s.edges_checked = Median(f["edges"]);
+  s.search_rounds = Median(f["rounds"]);
+  s.certify_checks = Median(f["certify"]);
+  s.limit_ratio = Median(f["ratio"]);
+  return s;
+}
+
+Run RunOnce(const Method& m, const Problem& p, double k) {
+  Run r;
+  CountingChecker counter(*p.planner);
+  const int64_t cc0 = p.planner->total_collision_checks();
+  const int64_t dq0 = p.planner->total_distance_queries();
+  Output out;
+  const auto t0 = std::chrono::steady_clock::now();
+  try {
+    out = m.run(counter, p);
+  } catch (const std::exception& e) {
+    r.error = e.what();
+    return r;
+  }
+  r.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  r.collision_checks = p.planner->total_collision_checks() - cc0;
+  r.distance_queries = p.planner->total_distance_queries() - dq0;
+  // The merge counts its own local-planner runs (MergeStats::edges_checked); the others are
+  // counted at the checker.
+  r.edges_checked = out.engine_edges_checked >= 0 ? out.engine_edges_checked : counter.edges();
+  r.search_rounds = out.search_rounds;
+  r.objective = out.objective;
+  r.hgraph_objective = out.hgraph_objective;
+  const PathCheckResult check =
+      CheckPaths(*p.planner, PathCheckRequest{.paths = {out.path}, .k = k});
+  const InputReport& rep = check.paths.at(0);
+  r.ok = true;
+  r.valid = rep.valid;
+  r.certified = rep.valid && rep.certified;
+  r.length = rep.quality.length;
+  r.min_clearance = rep.quality.min_clearance;
+  r.inverse_clearance = rep.quality.inverse_clearance;
+  r.certify_checks = check.collision_checks + check.distance_queries;
+  return r;
+}
+
+// hgraph_objective exists once the anytime post-optimization is merged.
+template <typename R>
+auto HgraphObjective(const R& result, int) -> decltype(result.hgraph_objective, double()) {
+  return result.hgraph_objective;
+}
+template <typename R>
+double HgraphObjective(const R&, long) {
+  return NAN;
+}
+
+Output FromMerge(const MergeResult& result) {
+  return Output{.path = result.path,
+                .objective = result.objective,
+                .hgraph_objective = HgraphObjective(result, 0),
+                .search_rounds = result.stats.search_rounds,
+                .engine_edges_checked = result.stats.edges_checked};
+}
+
+Method HgraphMethod(const std::string& name, const std::string& label, MeasureSpec measure,
+                    MergeOptions options) {
+  return Method{.name = name,
+                .label = label,
+                .run = [measure, options](const MotionChecker& checker, const Problem& p) {
+                  return FromMerge(Merge(
+                      checker, MergeRequest{.paths = p.inputs, .measure = measure,
+                                            .options = options}));
+                }};
+}
+
+std::vector<Method> Methods(const Problem& p, bool inverse_clearance_pair, uint64_t seed) {
+  std::vector<Method> m;
+  m.push_back(HgraphMethod("hgraph-defaults", "hgraph defaults", {}, {}));
+  m.push_back(HgraphMethod(
+      "hgraph-eager-all-pairs", "hgraph eager all-pairs", {},
+      MergeOptions{.candidates = {.variant = Variant::kAllPairs}, .evaluation = Evaluation::kEager}));
+  m.push_back(HgraphMethod("hgraph-lazy-all-pairs", "hgraph lazy all-pairs", {},
+                           MergeOptions{.candidates = {.variant = Variant::kAllPairs}}));
+  const double res = p.resolution;
+  m.push_back(Method{
+      .name = "ompl-hybridize-gaps+simplifymax",
+      .label = "OMPL hybridize (gaps) + simplifyMax",
+      .ompl = true,
+      .run = [res, seed](const MotionChecker& c, const Problem& q) {
+        const InputPath h = OmplHybridize(c, q.inputs, {.resolution = res});
+        return Output{.path = SimplifyMaxPath(c, h, {.seed = seed, .resolution = res})};
+      }});
+  m.push_back(Method{
+      .name = "ompl-hybridize-nogaps+simplifymax",
+      .label = "OMPL hybridize (no gaps) + simplifyMax",
+      .ompl = true,
+      .run = [res, seed](const MotionChecker& c, const Problem& q) {
+        const InputPath h =
+            OmplHybridize(c, q.inputs, {.resolution = res, .match_across_gaps = false});
+        return Output{.path = SimplifyMaxPath(c, h, {.seed = seed, .resolution = res})};
+      }});
+  m.push_back(Method{
+      .name = "ompl-simplifymax-best-input",
+      .label = "OMPL simplifyMax on best input",
+      .ompl = true,
+      .run = [res, seed](const MotionChecker& c, const Problem& q) {
+        return Output{.path = SimplifyMaxPath(c, q.inputs.at(q.best_input),
+                                              {.seed = seed, .resolution = res})};
+      }});
+  if (inverse_clearance_pair) {
+    const MeasureSpec ic{.type = MeasureType::kInverseClearance, .k = 3};
+    m.push_back(HgraphMethod(
+        "hgraph-ic3-lazy-all-pairs-spacing1", "hgraph inv. clearance k=3, lazy, all-pairs, spacing 1",
+        ic, MergeOptions{.candidates = {.variant = Variant::kAllPairs}, .max_node_spacing = 1}));
+    m.push_back(HgraphMethod(
+        "hgraph-ic3-eager-all-pairs-spacing1",
+        "hgraph inv. clearance k=3, eager, all-pairs, spacing 1", ic,
+        MergeOptions{.candidates = {.variant = Variant::kAllPairs},
+                     .evaluation = Evaluation::kEager,
+                     .max_node_spacing = 1}));
+  }
+  return m;
+}
+
+double PathLength(const Space& space, const InputPath& path) {
+  double l = 0;
+  for (size_t i = 1; i < path.waypoints.size(); ++i) {
+    l += space.Distance(path.waypoints[i - 1], path.waypoints[i]);
+  }
+  return l;
+}
+
+// Loads the scene and its inputs: read back from <out>/inputs/<name>.json if present, else
+// planned with PRM from the scene's start to goal and written there.
+Problem LoadProblem(const std::string& name, const std::string& file, const fs::path& out_dir,
+                    int count, double time_s, uint64_t seed) {
+  Problem p{.name = name, .file = file};
+  const v1::Scene proto = ReadSceneFile(file);
+  p.resolution = SceneResolution(proto);
+  p.scene = SceneFromProto(proto, fs::path(file).parent_path().string(), {});
+  p.world = std::make_shared<const CollisionWorld>(p.scene);
+  p.planner = std::make_unique<LocalPlanner>(p.world,
+                                             LocalPlannerOptions{.resolution = p.resolution});
+  const fs::path inputs_file = out_dir / "inputs" / (name + ".json");
+  if (fs::exists(inputs_file)) {
+    p.inputs = LoadPathsFile(inputs_file.string(), p.scene->space);
+    std::cerr << name << ": " << p.inputs.size() << " inputs read from " << inputs_file << "\n";
+  } else {
+    if (!p.scene->start || !p.scene->goal) {
+      throw InputError("scene", name + " has no start and goal");
+    }
+    const PlanResult plan = PlanPaths(*p.planner, PlanRequest{.planner = PlannerType::kPRM,
+                                                              .start = *p.scene->start,
+                                                              .goal = *p.scene->goal,
+                                                              .count = count,
+                                                              .time_s = time_s,
+                                                              .seed = seed,
+                                                              .resolution = p.resolution});
+    p.inputs = plan.paths;
+    if (p.inputs.empty()) throw InputError("scene", name + ": PRM found no path");
+    fs::create_directories(inputs_file.parent_path());
+    WritePathsFile(inputs_file.string(), p.inputs);
+    std::cerr << name << ": planned " << p.inputs.size() << " of " << count << " inputs, written to "
+              << inputs_file << "\n";
+  }
+  for (size_t i = 0; i < p.inputs.size(); ++i) {
+    p.input_lengths.push_back(PathLength(p.scene->space, p.inputs[i]));
+    if (p.input_lengths[i] < p.input_lengths[p.best_input]) p.best_input = static_cast<int>(i);
+  }
+  return p;
+}
+
+std::string Num(double v, int precision = 4) {
+  if (std::isnan(v)) return "null";
+  if (std::isinf(v)) return v > 0 ? "1e308" : "-1e308";
+  std::ostringstream s;
+  s.precision(precision);
+  s << v;
+  return s.str();
+}
+
+std::string Cell(double v, int precision = 4) {
+  if (std::isnan(v)) return "-";
+  std::ostringstream s;
+  s.precision(precision);
+  s << v;
+  return s.str();
+}
+
+std::string Quote(const std::string& s) {
+  std::string o = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') o += '\\';
+    if (c == '\n') {
+      o += "\\n";
+      continue;
+    }
+    o += c;
+  }
+  return o + "\"";
+}
+
+struct SceneResult {
+  std::string name;
+  int inputs = 0;
+  std::vector<double> input_lengths;
+  std::vector<Summary> methods;
+  int best_ompl = -1;  // index into methods
+  double length_ratio = NAN, time_ratio = NAN;
+};
+
+void Compare(SceneResult* s) {
+  for (size_t i = 0; i < s->methods.size(); ++i) {
+    const Summary& m = s->methods[i];
+    if (!m.ompl || !m.certified) continue;
+    if (s->best_ompl < 0 || m.length < s->methods[s->best_ompl].length) s->best_ompl = static_cast<int>(i);
+  }
+  if (s->best_ompl < 0 || s->methods[0].runs_ok == 0) return;
+  s->length_ratio = s->methods[0].length / s->methods[s->best_ompl].length;
+  s->time_ratio = s->methods[0].ms / s->methods[s->best_ompl].ms;
+}
+
+std::string Json(const std::vector<SceneResult>& scenes, const std::string& command, int runs) {
+  std::ostringstream o;
+  o << "{\n  \"command\": " << Quote(command) << ",\n  \"runs\": " << runs << ",\n  \"scenes\": [";
+  for (size_t si = 0; si < scenes.size(); ++si) {
+    const SceneResult& s = scenes[si];
+    o << (si ? "," : "") << "\n    {\"name\": " << Quote(s.name) << ", \"inputs\": " << s.inputs
+      << ", \"input_lengths\": [";
+    for (size_t i = 0; i < s.input_lengths.size(); ++i) {
+      o << (i ? ", " : "") << Num(s.input_lengths[i], 8);
+    }
+    o << "],\n     \"best_certified_ompl\": "
+      << (s.best_ompl >= 0 ? Quote(s.methods[s.best_ompl].method) : "null")
+      << ", \"defaults_length_ratio\": " << Num(s.length_ratio, 6)
+      << ", \"defaults_time_ratio\": " << Num(s.time_ratio, 6) << ",\n     \"methods\": [";
+    for (size_t i = 0; i < s.methods.size(); ++i) {
+      const Summary& m = s.methods[i];
+      o << (i ? "," : "") << "\n       {\"method\": " << Quote(m.method)
+        << ", \"runs_ok\": " << m.runs_ok << ", \"error\": " << Quote(m.error)
+        << ", \"certified\": " << (m.certified ? "true" : "false")
+        << ", \"length\": " << Num(m.length, 8) << ", \"objective\": " << Num(m.objective, 8)
+        << ", \"hgraph_objective\": " << Num(m.hgraph_objective, 8)
+        << ", \"min_clearance\": " << Num(m.min_clearance, 6)
+        << ", \"inverse_clearance_k3\": " << Num(m.inverse_clearance, 8)
+        << ", \"ms\": " << Num(m.ms, 6) << ", \"collision_checks\": " << Num(m.collision_checks, 12)
+        << ", \"distance_queries\": " << Num(m.distance_queries, 12)
+        << ", \"edges_checked\": " << Num(m.edges_checked, 12)
+        << ", \"search_rounds\": " << Num(m.search_rounds, 12)
+        << ", \"certify_output_checks\": " << Num(m.certify_checks, 12)
+        << ", \"physical_limit_ratio\": " << Num(m.limit_ratio, 6) << "}";
+    }
+    o << "]}";
+  }
+  o << "\n  ]\n}\n";
+  return o.str();
+}
+
+std::string Markdown(const std::vector<SceneResult>& scenes, const std::string& command,
+                     int runs) {
+  std::ostringstream o;
+  o << "Medians of " << runs << " interleaved runs. `" << command << "`\n\n"
+    << "Length and clearance of each output are from our certified CheckPaths; *cert.* = every "
+       "run's output certified. *checks* = collision checks + distance queries; *limit* = checks "
+       "/ checks to certify the output path alone. hgraph runs on all cores, OMPL on one.\n\n";
+  for (const SceneResult& s : scenes) {
+    o << "**" << s.name << "** (" << s.inputs << " PRM inputs, best input length "
+      << Cell(*std::min_element(s.input_lengths.begin(), s.input_lengths.end())) << "): defaults / "
+      << "best certified OMPL = " << Cell(s.length_ratio, 4) << " in length, "
+      << Cell(s.time_ratio, 3) << " in time\n\n"
+      << "| method | length | objective | min cl. | cert. | ms | coll. checks | dist. queries | "
+         "edges | rounds | limit |\n|---|---|---|---|---|---|---|---|---|---|---|\n";
+    for (size_t i = 0; i < s.methods.size(); ++i) {
+      const Summary& m = s.methods[i];
+      if (m.runs_ok == 0) {
+        o << "| " << m.label << " | failed: " << m.error << " |||||||||\n";
+        continue;
+      }
+      o << "| " << m.label << (static_cast<int>(i) == s.best_ompl ? " (best OMPL)" : "") << " | "
+        << Cell(m.length, 5) << " | " << Cell(m.objective, 5) << " | " << Cell(m.min_clearance, 3)
+        << " | " << (m.certified ? "yes" : "no") << " | " << Cell(m.ms, 4) << " | "
+        << Cell(m.collision_checks, 8) << " | " << Cell(m.distance_queries, 8) << " | "
+        << Cell(m.edges_checked, 8) << " | " << Cell(m.search_rounds, 8) << " | "
+        << Cell(m.limit_ratio, 3) << " |\n";
+    }
+    o << "\n";
+  }
+  return o.str();
+}
+
+// Two panels, one group of bars per scene: each length-method's length and time relative to the
+// best certified OMPL pipeline (1 = equal), on a log2 scale around 1.
+std::string Svg(const std::vector<SceneResult>& scenes) {
+  const std::vector<std::string> colors = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728",
+                                           "#9467bd", "#8c564b"};
+  const int kMethods = 6;  // the length methods; the inverse-clearance pair is not compared
+  const double group_w = 150, bar_w = 20, left = 60, panel_h = 220, top = 40, legend_h = 130;
+  const double width = left + group_w * scenes.size() + 20;
+  const double height = top + 2 * (panel_h + 40) + legend_h;
+  std::ostringstream o;
+  o << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width << "\" height=\"" << height
+    << "\" font-family=\"sans-serif\" font-size=\"11\">\n<rect width=\"100%\" height=\"100%\" "
+       "fill=\"white\"/>\n";
+  o << "<text x=\"" << left << "\" y=\"20\" font-size=\"14\">Relative to the best certified OMPL "
+       "pipeline per scene (log2 scale; below the line = better)</text>\n";
+  for (int panel = 0; panel < 2; ++panel) {
+    const double y0 = top + panel * (panel_h + 40);
+    const double mid = y0 + panel_h / 2;
+    const double range = panel == 0 ? 0.5 : 4.0;  // log2 half-range
+    o << "<text x=\"5\" y=\"" << y0 + 12 << "\" font-size=\"12\">"
+      << (panel == 0 ? "length ratio" : "time ratio") << "</text>\n";
+    for (double e : {-range, -range / 2, 0.0, range / 2, range}) {
+      const double y = mid - e / range * (panel_h / 2);
+      o << "<line x1=\"" << left << "\" x2=\"" << width - 10 << "\" y1=\"" << y << "\" y2=\"" << y
+        << "\" stroke=\"" << (e == 0 ? "black" : "#ddd") << "\"/>\n<text x=\"" << left - 5
+        << "\" y=\"" << y + 4 << "\" text-anchor=\"end\">" << Cell(std::exp2(e), 3) << "</text>\n";
+    }
+    for (size_t si = 0; si < scenes.size(); ++si) {
+      const SceneResult& s = scenes[si];
+      const double gx = left + group_w * si + 10;
+      if (panel == 1) {
+        o << "<text x=\"" << gx + group_w / 2 - 10 << "\" y=\"" << y0 + panel_h + 15
+          << "\" text-anchor=\"middle\">" << s.name << "</text>\n";
+      }
+      if (s.best_ompl < 0) continue;
+      const Summary& ref = s.methods[s.best_ompl];
+      for (int i = 0; i < kMethods && i < static_cast<int>(s.methods.size()); ++i) {
+        const Summary& m = s.methods[i];
+        if (m.runs_ok == 0) continue;
+        const double ratio = panel == 0 ? m.length / ref.length : m.ms / ref.ms;
+        const double e = std::clamp(std::log2(ratio), -range, range);
+        const double y = mid - e / range * (panel_h / 2);
+        o << "<rect x=\"" << gx + i * bar_w << "\" y=\"" << std::min(y, mid) << "\" width=\""
+          << bar_w - 2 << "\" height=\"" << std::max(1.0, std::abs(y - mid)) << "\" fill=\""
+          << colors[i] << "\"" << (m.certified ? "" : " fill-opacity=\"0.35\"") << "><title>"
+          << m.label << ": " << Cell(ratio, 4) << "</title></rect>\n";
+      }
+    }
+  }
+  if (!scenes.empty()) {
+    const double ly = top + 2 * (panel_h + 40) + 10;
+    for (int i = 0; i < kMethods && i < static_cast<int>(scenes[0].methods.size()); ++i) {
+      o << "<rect x=\"" << left << "\" y=\"" << ly + 18 * i << "\" width=\"12\" height=\"12\" "
+        << "fill=\"" << colors[i] << "\"/><text x=\"" << left + 18 << "\" y=\"" << ly + 18 * i + 10
+        << "\">" << scenes[0].methods[i].label << "</text>\n";
+    }
+    o << "<text x=\"" << left << "\" y=\"" << ly + 18 * kMethods + 10
+      << "\">pale bar: output not certified in every run</text>\n";
+  }
+  o << "</svg>\n";
+  return o.str();
+}
+
+void WriteFile(const fs::path& path, const std::string& text) {
+  std::ofstream f(path);
+  f << text;
+  if (!f) throw Error(ErrorCode::kNotFound, "out", "cannot write " + path.string());
+}
+
+int Main(int argc, char** argv) {
+  CLI::App app{"hgraph against OMPL's hybridize + simplifyMax pipeline, side by side"};
+  std::vector<std::string> scene_names = {"grid",      "maze",      "circles",     "wrench",
+                                          "double_wrench", "wall_planar", "hole_wall",
+                                          "two_slots"};
+  std::vector<std::string> ic_scenes = {"wrench"};
+  int runs = 5;
+  int count = 4;
+  double plan_time_s = 5;
+  uint64_t seed = 1;
+  std::string out = "bench-out";
+  app.add_option("--scenes", scene_names, "scene names (built-in, wall_planar, hole_wall, "
+                                          "two_slots) or scene files");
+  app.add_option("--runs", runs, "repetitions per method (medians)")->check(CLI::PositiveNumber);
+  app.add_option("--inputs", count, "PRM input paths per scene")->check(CLI::Range(1, 20));
+  app.add_option("--plan-time", plan_time_s, "PRM budget per input path, seconds");
+  app.add_option("--seed", seed, "PRM and simplifier seed");
+  app.add_option("--out", out, "output folder (inputs are cached in <out>/inputs)");
+  app.add_option("--inverse-clearance-scenes", ic_scenes,
+                 "scenes that also run inverse clearance k=3, all-pairs, node spacing 1, lazy "
+                 "and eager");
+  CLI11_PARSE(app, argc, argv);
+
+  std::string command = "build/hgraph-bench --runs " + std::to_string(runs) + " --seed " +
+                        std::to_string(seed) + " --out " + out + " --scenes";
+  for (const auto& s : scene_names) command += " " + s;
+
+  const fs::path source(HGRAPH_SOURCE_DIR);
+  const fs::path out_dir(out);
+  fs::create_directories(out_dir);
+  std::vector<SceneResult> results;
+  for (const std::string& name : scene_names) {
+    fs::path file;
+    if (fs::exists(name)) {
+      file = name;
+    } else if (name == "wall_planar") {
+      file = source / "tests/data/ompl_app/wall_planar.cfg";
+    } else if (fs::exists(source / "tests/bench/scenes" / name / "scene.json")) {
+      file = source / "tests/bench/scenes" / name / "scene.json";
+    } else {
+      file = source / "scenes" / name / "scene.json";
+    }
+    const std::string short_name = fs::path(name).stem() == "scene"
+                                       ? fs::path(name).parent_path().filename().string()
+                                       : fs::path(name).stem().string();
+    Problem p = LoadProblem(short_name, file.string(), out_dir, count, plan_time_s, seed);
+    const bool ic = std::find(ic_scenes.begin(), ic_scenes.end(), short_name) != ic_scenes.end();
+    const std::vector<Method> methods = Methods(p, ic, seed);
+    std::vector<std::vector<Run>> runs_by_method(methods.size());
+    for (int r = 0; r < runs; ++r) {
+      // Interleaved, and the order rotates each run so no method always runs first.
+      for (size_t j = 0; j < methods.size(); ++j) {
+        const size_t i = (j + r) % methods.size();
+        runs_by_method[i].push_back(RunOnce(methods[i], p, 3.0));
+      }
+      std::cerr << p.name << ": run " << r + 1 << "/" << runs << " done\n";
+    }
+    SceneResult s{.name = p.name, .inputs = static_cast<int>(p.inputs.size()),
+                  .input_lengths = p.input_lengths};
+    for (size_t i = 0; i < methods.size(); ++i) {
+      s.methods.push_back(Summarize(methods[i], runs_by_method[i]));
+    }
+    Compare(&s);
+    results.push_back(std::move(s));
+    // Rewritten after every scene, so a long run leaves its figures so far.
+    WriteFile(out_dir / "results.json", Json(results, command, runs));
+    WriteFile(out_dir / "results.md", Markdown(results, command, runs));
+    WriteFile(out_dir / "results.svg", Svg(results));
+  }
+  std::cout << Markdown(results, command, runs);
+  return 0;
+}
+
+}  // namespace
+}  // namespace hgraph
+
+int main(int argc, char** argv) {
+  try {
+    return hgraph::Main(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "hgraph-bench: " << e.what() << "\n";
+    return 1;
+  }
+}
