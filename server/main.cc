@@ -143,13 +143,13 @@ int main(int argc, char** argv) {
       .max_blob_bytes = flags.max_blob_bytes,
       .session_ttl = std::chrono::milliseconds(static_cast<int64_t>(flags.session_ttl_s * 1e3)),
       .progress_interval_ms = flags.progress_interval_ms,
-      .mesh_import = {
-          .helper_path = flags.mesh_import_helper.empty() ? hgraph::server::DefaultMeshImportHelper()
-                                                          : flags.mesh_import_helper,
-          .memory_mb = flags.mesh_import_memory_mb,
-          .cpu_s = flags.mesh_import_cpu_s,
-          .timeout = std::chrono::milliseconds(
-              static_cast<int64_t>(flags.mesh_import_timeout_s * 1e3))}};
+      .mesh_import = {.helper_path = flags.mesh_import_helper.empty()
+                                         ? hgraph::server::DefaultMeshImportHelper()
+                                         : flags.mesh_import_helper,
+                      .memory_mb = flags.mesh_import_memory_mb,
+                      .cpu_s = flags.mesh_import_cpu_s,
+                      .timeout = std::chrono::milliseconds(
+                          static_cast<int64_t>(flags.mesh_import_timeout_s * 1e3))}};
 
   try {
     hgraph::server::MeshImporter(options.mesh_import).CheckHelper();

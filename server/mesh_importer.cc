@@ -115,7 +115,8 @@ std::shared_ptr<const Mesh> MeshImporter::Import(const std::string& bytes,
                                                  const CancelToken& token) const {
   CheckMeshScale(options, field);
   if (bytes.empty()) throw InputError(field, "mesh data is empty");
-  const std::string request = EncodeMeshRequest({.format = format, .options = options, .bytes = bytes});
+  const std::string request =
+      EncodeMeshRequest({.format = format, .options = options, .bytes = bytes});
   const auto started = Clock::now();
   const auto deadline = started + limits_.timeout;
 
@@ -149,13 +150,15 @@ std::shared_ptr<const Mesh> MeshImporter::Import(const std::string& bytes,
   sigfillset(&all);
   posix_spawnattr_setsigmask(&attr, &none);
   posix_spawnattr_setsigdefault(&attr, &all);
-  posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETSIGMASK | POSIX_SPAWN_SETSIGDEF |
-                                      POSIX_SPAWN_SETPGROUP);
+  posix_spawnattr_setflags(&attr,
+                           POSIX_SPAWN_SETSIGMASK | POSIX_SPAWN_SETSIGDEF | POSIX_SPAWN_SETPGROUP);
   const std::string memory_arg = std::to_string(limits_.memory_mb);
   const std::string cpu_arg = std::to_string(limits_.cpu_s);
   std::vector<char*> argv = {const_cast<char*>(limits_.helper_path.c_str()),
-                             const_cast<char*>("--memory-mb"), const_cast<char*>(memory_arg.c_str()),
-                             const_cast<char*>("--cpu-s"), const_cast<char*>(cpu_arg.c_str()),
+                             const_cast<char*>("--memory-mb"),
+                             const_cast<char*>(memory_arg.c_str()),
+                             const_cast<char*>("--cpu-s"),
+                             const_cast<char*>(cpu_arg.c_str()),
                              nullptr};
   char* envp[] = {nullptr};
   pid_t pid = -1;
@@ -164,9 +167,9 @@ std::shared_ptr<const Mesh> MeshImporter::Import(const std::string& bytes,
   posix_spawn_file_actions_destroy(&actions);
   posix_spawnattr_destroy(&attr);
   if (spawned != 0) {
-    throw Error(ErrorCode::kFailedPrecondition, field,
-                "cannot start the mesh importer '" + limits_.helper_path +
-                    "': " + std::strerror(spawned));
+    throw Error(
+        ErrorCode::kFailedPrecondition, field,
+        "cannot start the mesh importer '" + limits_.helper_path + "': " + std::strerror(spawned));
   }
   Child child(pid);
   // Limits set from here too, so that they hold whatever the helper does; it sets the same
@@ -190,10 +193,10 @@ std::shared_ptr<const Mesh> MeshImporter::Import(const std::string& bytes,
     if (token.cancelled()) throw Error(ErrorCode::kCancelled, field, "cancelled by the caller");
     const auto now = Clock::now();
     if (now >= deadline || token.deadline_passed()) {
-      stopped = now >= deadline ? "did not finish within " +
-                                      std::to_string(limits_.timeout.count()) +
-                                      " ms (--mesh-import-timeout-s)"
-                                : "did not finish before the call's deadline";
+      stopped = now >= deadline
+                    ? "did not finish within " + std::to_string(limits_.timeout.count()) +
+                          " ms (--mesh-import-timeout-s)"
+                    : "did not finish before the call's deadline";
       break;
     }
     pollfd fds[2] = {{.fd = out_parent.get(), .events = POLLIN, .revents = 0},
@@ -229,22 +232,22 @@ std::shared_ptr<const Mesh> MeshImporter::Import(const std::string& bytes,
       std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - started).count();
   if (!stopped.empty() || too_long) child.Kill();
   const int status = child.Wait();
-  const std::string prefix = "mesh import (format '" + format + "', " +
-                             std::to_string(bytes.size()) + " bytes) ";
+  const std::string prefix =
+      "mesh import (format '" + format + "', " + std::to_string(bytes.size()) + " bytes) ";
   if (!stopped.empty()) {
-    throw InputError(field, prefix + stopped + " and was stopped after " +
-                                std::to_string(elapsed_ms) + " ms");
+    throw InputError(
+        field, prefix + stopped + " and was stopped after " + std::to_string(elapsed_ms) + " ms");
   }
   if (too_long) throw InputError(field, prefix + "wrote more output than its limits allow");
   if (WIFSIGNALED(status)) {
     const int signal = WTERMSIG(status);
     if (signal == SIGXCPU || signal == SIGKILL) {
       throw InputError(field, prefix + "hit its CPU limit of " + std::to_string(limits_.cpu_s) +
-                                  " s (--mesh-import-cpu-s) and was killed (" +
-                                  SignalName(signal) + ")");
+                                  " s (--mesh-import-cpu-s) and was killed (" + SignalName(signal) +
+                                  ")");
     }
-    throw InputError(field, prefix + "crashed with " + SignalName(signal) +
-                                " (the file is malformed)");
+    throw InputError(field,
+                     prefix + "crashed with " + SignalName(signal) + " (the file is malformed)");
   }
   const int exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   const MeshReply decoded = DecodeMeshReply(reply, options);
@@ -253,7 +256,8 @@ std::shared_ptr<const Mesh> MeshImporter::Import(const std::string& bytes,
   }
   if (exit_code == 3) {
     throw InputError(field, prefix + "ran out of memory (limit " +
-                                std::to_string(limits_.memory_mb) + " MiB, --mesh-import-memory-mb)");
+                                std::to_string(limits_.memory_mb) +
+                                " MiB, --mesh-import-memory-mb)");
   }
   if (!decoded.mesh || exit_code != 0) {
     throw InputError(field, prefix + "failed (exit status " + std::to_string(exit_code) +

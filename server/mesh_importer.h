@@ -16,7 +16,7 @@
 namespace hgraph::server {
 
 struct MeshImportLimits {
-  std::string helper_path;  // the hgraph-mesh-import executable
+  std::string helper_path;   // the hgraph-mesh-import executable
   int64_t memory_mb = 1024;  // 0 = no address-space limit (sanitizer and fuzz builds only)
   int cpu_s = 20;
   std::chrono::milliseconds timeout{30000};  // per import, shortened by the call's deadline

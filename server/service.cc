@@ -252,7 +252,8 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
         request->progress_interval_ms() > limits::kMaxProgressIntervalMs) {
       Complete(grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
                             "progress_interval_ms: must be in [0, " +
-                                std::to_string(limits::kMaxProgressIntervalMs) + "] (0 = the "
+                                std::to_string(limits::kMaxProgressIntervalMs) +
+                                "] (0 = the "
                                 "server's default), got " +
                                 std::to_string(request->progress_interval_ms())),
                false);
@@ -715,8 +716,8 @@ class PathMergerService::PlanCall final : public grpc::ServerWriteReactor<v1::Pl
     const v1::PlanPathsRequest& request = *request_;
     const v1::Session session = service_->sessions_.Touch(request.session(), "session");
     if (request.count() < 0) {
-      throw InputError("count", "must be >= 0 (0 = one path), got " +
-                                    std::to_string(request.count()));
+      throw InputError("count",
+                       "must be >= 0 (0 = one path), got " + std::to_string(request.count()));
     }
     if (request.time_per_path_s() != 0) {
       limits::RequirePositiveUpTo(request.time_per_path_s(), limits::kMaxPlanSeconds,

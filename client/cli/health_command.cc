@@ -24,7 +24,7 @@ constexpr int kServing = 1;
 std::string EncodeRequest(const std::string& service) {
   std::string bytes;
   if (service.empty()) return bytes;  // proto3 leaves an empty string out
-  bytes.push_back(0x0a);  // field 1, length-delimited
+  bytes.push_back(0x0a);              // field 1, length-delimited
   size_t n = service.size();
   do {
     const unsigned char low = n & 0x7f;
@@ -109,9 +109,8 @@ Subcommand AddHealthCommand(CLI::App& parent) {
   app->add_option("--service", *service,
                   "service name to ask about (empty = the whole server; or hgraph.v1.PathMerger)");
   app->add_option("--timeout", *timeout_s, "Deadline, seconds")->capture_default_str();
-  return Subcommand{app, [server, service, timeout_s] {
-                      return CheckHealth(*server, *service, *timeout_s);
-                    }};
+  return Subcommand{
+      app, [server, service, timeout_s] { return CheckHealth(*server, *service, *timeout_s); }};
 }
 
 }  // namespace hgraph::cli

@@ -14,9 +14,12 @@ int main(int argc, char** argv) {
       "hgraph");
   app.require_subcommand(1);
   std::vector<Subcommand> subcommands = {
-      WithServer(AddMergeCommand(app)),     WithServer(AddCheckCommand(app)),
-      WithServer(AddPlanCommand(app)),      WithServer(AddRenderCommand(app)),
-      WithServer(AddImportCfgCommand(app)), AddRequeryCommand(app),
+      WithServer(AddMergeCommand(app)),
+      WithServer(AddCheckCommand(app)),
+      WithServer(AddPlanCommand(app)),
+      WithServer(AddRenderCommand(app)),
+      WithServer(AddImportCfgCommand(app)),
+      AddRequeryCommand(app),
       AddHealthCommand(app),
   };
 

@@ -55,8 +55,8 @@ class InternalError : public std::logic_error {
 };
 
 [[noreturn]] inline void CheckFailed(const char* condition, const char* file, int line) {
-  throw InternalError(std::string("internal invariant failed: ") + condition + " at " + file +
-                      ":" + std::to_string(line));
+  throw InternalError(std::string("internal invariant failed: ") + condition + " at " + file + ":" +
+                      std::to_string(line));
 }
 
 }  // namespace hgraph

@@ -7,7 +7,6 @@
 
 #include <assimp/IOStream.hpp>
 #include <assimp/IOSystem.hpp>
-
 #include <map>
 #include <memory>
 #include <string>

@@ -30,8 +30,9 @@ struct MeshLoadOptions {
 // Throws InputError(field) unless every scale factor is positive and finite.
 void CheckMeshScale(const MeshLoadOptions& options, const std::string& field);
 
-// Reads a mesh file (only that file: names inside it are not opened). Throws Error(kNotFound) naming `field` if the file is missing, and
-// InputError naming `field` if assimp cannot parse it or it has no triangles.
+// Reads a mesh file (only that file: names inside it are not opened). Throws Error(kNotFound)
+// naming `field` if the file is missing, and InputError naming `field` if assimp cannot parse it or
+// it has no triangles.
 std::shared_ptr<const Mesh> LoadMeshFile(const std::string& path, const MeshLoadOptions& options,
                                          const std::string& field);
 

@@ -76,8 +76,9 @@ void PrescanOff(std::string_view bytes, const std::string& field) {
   const std::optional<uint64_t> vertices = Count(counts[0]);
   const std::optional<uint64_t> faces = Count(counts[1]);
   if (!vertices || !faces || *vertices > kMaxDeclaredCount || *faces > kMaxDeclaredCount) {
-    throw InputError(field, "OFF header: vertex and face counts must be non-negative integers "
-                            "below 2^32");
+    throw InputError(field,
+                     "OFF header: vertex and face counts must be non-negative integers "
+                     "below 2^32");
   }
   // A vertex line holds at least "x y z\n" (6 bytes), a face line at least "k i\n" (4 bytes).
   const uint64_t needed = *vertices * 6 + *faces * 4;
@@ -116,8 +117,8 @@ void PrescanOff(std::string_view bytes, const std::string& field) {
 int PlyScalarBytes(std::string_view type) {
   if (type == "char" || type == "uchar" || type == "int8" || type == "uint8") return 1;
   if (type == "short" || type == "ushort" || type == "int16" || type == "uint16") return 2;
-  if (type == "int" || type == "uint" || type == "float" || type == "int32" ||
-      type == "uint32" || type == "float32") {
+  if (type == "int" || type == "uint" || type == "float" || type == "int32" || type == "uint32" ||
+      type == "float32") {
     return 4;
   }
   if (type == "double" || type == "float64") return 8;
@@ -149,8 +150,8 @@ void PrescanPly(std::string_view bytes, const std::string& field) {
     const std::vector<std::string_view> t = Tokens(text);
     if (t.empty() || t[0] == "ply" || t[0] == "comment" || t[0] == "obj_info") continue;
     if (t[0] == "format") {
-      if (t.size() < 2 || (t[1] != "ascii" && t[1] != "binary_little_endian" &&
-                           t[1] != "binary_big_endian")) {
+      if (t.size() < 2 ||
+          (t[1] != "ascii" && t[1] != "binary_little_endian" && t[1] != "binary_big_endian")) {
         throw InputError(field, "PLY header: unknown format line");
       }
       ascii = t[1] == "ascii";

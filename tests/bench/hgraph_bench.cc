@@ -4,7 +4,6 @@
 // figures are medians over --runs. Every output is certified by our own CheckPaths. Writes
 // results.json, results.md and results.svg to --out. Never asserts: see README.md.
 #include <CLI/CLI.hpp>
-
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -221,70 +220,61 @@ Output FromMerge(const MergeResult& result) {
 
 Method HgraphMethod(const std::string& name, const std::string& label, MeasureSpec measure,
                     MergeOptions options) {
-  return Method{.name = name,
-                .label = label,
-                .run = [measure, options](const MotionChecker& checker, const Problem& p) {
-                  return FromMerge(Merge(
-                      checker, MergeRequest{.paths = p.inputs, .measure = measure,
-                                            .options = options}));
-                }};
+  return Method{
+      .name = name,
+      .label = label,
+      .run = [measure, options](const MotionChecker& checker, const Problem& p) {
+        return FromMerge(Merge(
+            checker, MergeRequest{.paths = p.inputs, .measure = measure, .options = options}));
+      }};
 }
 
 std::vector<Method> Methods(const Problem& p, bool inverse_clearance_pair, uint64_t seed) {
   std::vector<Method> m;
   m.push_back(HgraphMethod("hgraph-defaults", "hgraph defaults", {}, {}));
-  m.push_back(HgraphMethod(
-      "hgraph-eager-all-pairs", "hgraph eager all-pairs", {},
-      MergeOptions{.candidates = {.variant = Variant::kAllPairs}, .evaluation = Evaluation::kEager}));
+  m.push_back(HgraphMethod("hgraph-eager-all-pairs", "hgraph eager all-pairs", {},
+                           MergeOptions{.candidates = {.variant = Variant::kAllPairs},
+                                        .evaluation = Evaluation::kEager}));
   m.push_back(HgraphMethod("hgraph-lazy-all-pairs", "hgraph lazy all-pairs", {},
                            MergeOptions{.candidates = {.variant = Variant::kAllPairs}}));
   const double res = p.resolution;
-  m.push_back(Method{
-      .name = "ompl-hybridize-gaps+simplifymax",
-      .label = "OMPL hybridize (gaps) + simplifyMax",
-      .ompl = true,
-      .run = [res, seed](const MotionChecker& c, const Problem& q) {
-        const InputPath h = OmplHybridize(c, q.inputs, {.resolution = res});
-        return Output{.path = SimplifyMaxPath(c, h, {.seed = seed, .resolution = res})};
-      }});
-  m.push_back(Method{
-      .name = "ompl-hybridize-nogaps+simplifymax",
-      .label = "OMPL hybridize (no gaps) + simplifyMax",
-      .ompl = true,
-      .run = [res, seed](const MotionChecker& c, const Problem& q) {
-        const InputPath h =
-            OmplHybridize(c, q.inputs, {.resolution = res, .match_across_gaps = false});
-        return Output{.path = SimplifyMaxPath(c, h, {.seed = seed, .resolution = res})};
-      }});
-  m.push_back(Method{
-      .name = "ompl-simplifymax-best-input",
-      .label = "OMPL simplifyMax on best input",
-      .ompl = true,
-      .run = [res, seed](const MotionChecker& c, const Problem& q) {
-        return Output{.path = SimplifyMaxPath(c, q.inputs.at(q.best_input),
-                                              {.seed = seed, .resolution = res})};
-      }});
+  m.push_back(Method{.name = "ompl-hybridize-gaps+simplifymax",
+                     .label = "OMPL hybridize (gaps) + simplifyMax",
+                     .ompl = true,
+                     .run = [res, seed](const MotionChecker& c, const Problem& q) {
+                       const InputPath h = OmplHybridize(c, q.inputs, {.resolution = res});
+                       return Output{.path =
+                                         SimplifyMaxPath(c, h, {.seed = seed, .resolution = res})};
+                     }});
+  m.push_back(
+      Method{.name = "ompl-hybridize-nogaps+simplifymax",
+             .label = "OMPL hybridize (no gaps) + simplifyMax",
+             .ompl = true,
+             .run = [res, seed](const MotionChecker& c, const Problem& q) {
+               const InputPath h =
+                   OmplHybridize(c, q.inputs, {.resolution = res, .match_across_gaps = false});
+               return Output{.path = SimplifyMaxPath(c, h, {.seed = seed, .resolution = res})};
+             }});
+  m.push_back(Method{.name = "ompl-simplifymax-best-input",
+                     .label = "OMPL simplifyMax on best input",
+                     .ompl = true,
+                     .run = [res, seed](const MotionChecker& c, const Problem& q) {
+                       return Output{.path = SimplifyMaxPath(c, q.inputs.at(q.best_input),
+                                                             {.seed = seed, .resolution = res})};
+                     }});
   if (inverse_clearance_pair) {
     const MeasureSpec ic{.type = MeasureType::kInverseClearance, .k = 3};
     m.push_back(HgraphMethod(
-        "hgraph-ic3-lazy-all-pairs-spacing1", "hgraph inv. clearance k=3, lazy, all-pairs, spacing 1",
-        ic, MergeOptions{.candidates = {.variant = Variant::kAllPairs}, .max_node_spacing = 1}));
-    m.push_back(HgraphMethod(
-        "hgraph-ic3-eager-all-pairs-spacing1",
-        "hgraph inv. clearance k=3, eager, all-pairs, spacing 1", ic,
-        MergeOptions{.candidates = {.variant = Variant::kAllPairs},
-                     .evaluation = Evaluation::kEager,
-                     .max_node_spacing = 1}));
+        "hgraph-ic3-lazy-all-pairs-spacing1",
+        "hgraph inv. clearance k=3, lazy, all-pairs, spacing 1", ic,
+        MergeOptions{.candidates = {.variant = Variant::kAllPairs}, .max_node_spacing = 1}));
+    m.push_back(HgraphMethod("hgraph-ic3-eager-all-pairs-spacing1",
+                             "hgraph inv. clearance k=3, eager, all-pairs, spacing 1", ic,
+                             MergeOptions{.candidates = {.variant = Variant::kAllPairs},
+                                          .evaluation = Evaluation::kEager,
+                                          .max_node_spacing = 1}));
   }
   return m;
-}
-
-double PathLength(const Space& space, const InputPath& path) {
-  double l = 0;
-  for (size_t i = 1; i < path.waypoints.size(); ++i) {
-    l += space.Distance(path.waypoints[i - 1], path.waypoints[i]);
-  }
-  return l;
 }
 
 // Loads the scene and its inputs: read back from <out>/inputs/<name>.json if present, else
@@ -296,8 +286,8 @@ Problem LoadProblem(const std::string& name, const std::string& file, const fs::
   p.resolution = SceneResolution(proto);
   p.scene = SceneFromProto(proto, fs::path(file).parent_path().string(), {});
   p.world = std::make_shared<const CollisionWorld>(p.scene);
-  p.planner = std::make_unique<LocalPlanner>(p.world,
-                                             LocalPlannerOptions{.resolution = p.resolution});
+  p.planner =
+      std::make_unique<LocalPlanner>(p.world, LocalPlannerOptions{.resolution = p.resolution});
   const fs::path inputs_file = out_dir / "inputs" / (name + ".json");
   if (fs::exists(inputs_file)) {
     p.inputs = LoadPathsFile(inputs_file.string(), p.scene->space);
@@ -317,8 +307,8 @@ Problem LoadProblem(const std::string& name, const std::string& file, const fs::
     if (p.inputs.empty()) throw InputError("scene", name + ": PRM found no path");
     fs::create_directories(inputs_file.parent_path());
     WritePathsFile(inputs_file.string(), p.inputs);
-    std::cerr << name << ": planned " << p.inputs.size() << " of " << count << " inputs, written to "
-              << inputs_file << "\n";
+    std::cerr << name << ": planned " << p.inputs.size() << " of " << count
+              << " inputs, written to " << inputs_file << "\n";
   }
   for (size_t i = 0; i < p.inputs.size(); ++i) {
     p.input_lengths.push_back(PathLength(p.scene->space, p.inputs[i]));
@@ -370,7 +360,8 @@ void Compare(SceneResult* s) {
   for (size_t i = 0; i < s->methods.size(); ++i) {
     const Summary& m = s->methods[i];
     if (!m.ompl || !m.certified) continue;
-    if (s->best_ompl < 0 || m.length < s->methods[s->best_ompl].length) s->best_ompl = static_cast<int>(i);
+    if (s->best_ompl < 0 || m.length < s->methods[s->best_ompl].length)
+      s->best_ompl = static_cast<int>(i);
   }
   if (s->best_ompl < 0 || s->methods[0].runs_ok == 0) return;
   s->length_ratio = s->methods[0].length / s->methods[s->best_ompl].length;
@@ -413,8 +404,7 @@ std::string Json(const std::vector<SceneResult>& scenes, const std::string& comm
   return o.str();
 }
 
-std::string Markdown(const std::vector<SceneResult>& scenes, const std::string& command,
-                     int runs) {
+std::string Markdown(const std::vector<SceneResult>& scenes, const std::string& command, int runs) {
   std::ostringstream o;
   o << "Medians of " << runs << " interleaved runs. `" << command << "`\n\n"
     << "Length and clearance of each output are from our certified CheckPaths; *cert.* = every "
@@ -448,8 +438,8 @@ std::string Markdown(const std::vector<SceneResult>& scenes, const std::string& 
 // Two panels, one group of bars per scene: each length-method's length and time relative to the
 // best certified OMPL pipeline (1 = equal), on a log2 scale around 1.
 std::string Svg(const std::vector<SceneResult>& scenes) {
-  const std::vector<std::string> colors = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728",
-                                           "#9467bd", "#8c564b"};
+  const std::vector<std::string> colors = {"#1f77b4", "#ff7f0e", "#2ca02c",
+                                           "#d62728", "#9467bd", "#8c564b"};
   const int kMethods = 6;  // the length methods; the inverse-clearance pair is not compared
   const double group_w = 150, bar_w = 20, left = 60, panel_h = 220, top = 40, legend_h = 130;
   const double width = left + group_w * scenes.size() + 20;
@@ -458,7 +448,8 @@ std::string Svg(const std::vector<SceneResult>& scenes) {
   o << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width << "\" height=\"" << height
     << "\" font-family=\"sans-serif\" font-size=\"11\">\n<rect width=\"100%\" height=\"100%\" "
        "fill=\"white\"/>\n";
-  o << "<text x=\"" << left << "\" y=\"20\" font-size=\"14\">Relative to the best certified OMPL "
+  o << "<text x=\"" << left
+    << "\" y=\"20\" font-size=\"14\">Relative to the best certified OMPL "
        "pipeline per scene (log2 scale; below the line = better)</text>\n";
   for (int panel = 0; panel < 2; ++panel) {
     const double y0 = top + panel * (panel_h + 40);
@@ -516,17 +507,17 @@ void WriteFile(const fs::path& path, const std::string& text) {
 
 int Main(int argc, char** argv) {
   CLI::App app{"hgraph against OMPL's hybridize + simplifyMax pipeline, side by side"};
-  std::vector<std::string> scene_names = {"grid",      "maze",      "circles",     "wrench",
-                                          "double_wrench", "wall_planar", "hole_wall",
-                                          "two_slots"};
+  std::vector<std::string> scene_names = {"grid",          "maze",        "circles",   "wrench",
+                                          "double_wrench", "wall_planar", "hole_wall", "two_slots"};
   std::vector<std::string> ic_scenes = {"wrench"};
   int runs = 5;
   int count = 4;
   double plan_time_s = 5;
   uint64_t seed = 1;
   std::string out = "bench-out";
-  app.add_option("--scenes", scene_names, "scene names (built-in, wall_planar, hole_wall, "
-                                          "two_slots) or scene files");
+  app.add_option("--scenes", scene_names,
+                 "scene names (built-in, wall_planar, hole_wall, "
+                 "two_slots) or scene files");
   app.add_option("--runs", runs, "repetitions per method (medians)")->check(CLI::PositiveNumber);
   app.add_option("--inputs", count, "PRM input paths per scene")->check(CLI::Range(1, 20));
   app.add_option("--plan-time", plan_time_s, "PRM budget per input path, seconds");
@@ -571,7 +562,8 @@ int Main(int argc, char** argv) {
       }
       std::cerr << p.name << ": run " << r + 1 << "/" << runs << " done\n";
     }
-    SceneResult s{.name = p.name, .inputs = static_cast<int>(p.inputs.size()),
+    SceneResult s{.name = p.name,
+                  .inputs = static_cast<int>(p.inputs.size()),
                   .input_lengths = p.input_lengths};
     for (size_t i = 0; i < methods.size(); ++i) {
       s.methods.push_back(Summarize(methods[i], runs_by_method[i]));

@@ -256,7 +256,8 @@ def test_cancel_mid_merge_frees_the_workers(server, client):
 
 def test_deadline_exceeded(client):
     with pytest.raises(hgraph_client.HgraphError) as e:
-        client.merge(densified(40), variant="all-pairs", timeout=0.5)
+        # Eager all-pairs on densified inputs: seconds of checks, far past the deadline.
+        client.merge(densified(40), variant="all-pairs", evaluation="eager", timeout=0.5)
     assert e.value.code == grpc.StatusCode.DEADLINE_EXCEEDED
     assert client.merge(input_paths(), timeout=10).result.quality.length > 0
 
@@ -544,6 +545,7 @@ def test_cli_remote_deadline(server, tmp_path):
     paths.write_text("\n\n".join("\n".join(" ".join(map(str, q)) for q in p)
                                  for p in densified(40)) + "\n")
     late = run_cli("merge", "--server", server.target, "--scene", str(DATA / "scene.json"),
-                   "--paths", str(paths), "--variant", "all-pairs", "--timeout", "0.5", "-q")
+                   "--paths", str(paths), "--variant", "all-pairs", "--evaluation", "eager",
+                   "--timeout", "0.5", "-q")
     # The server did not answer in time: exit 3 (server failed), not 2 (bad input).
     assert late.returncode == 3 and "DEADLINE_EXCEEDED" in late.stderr, late.stderr

@@ -16,7 +16,8 @@ namespace hgraph::server {
 namespace {
 
 const std::string kHelper = std::string(HGRAPH_BINARY_DIR) + "/hgraph-mesh-import";
-const std::string kTetra = "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n3 0 1 3\n3 0 2 3\n3 1 2 3\n";
+const std::string kTetra =
+    "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n3 0 1 3\n3 0 2 3\n3 1 2 3\n";
 
 std::string ErrorOf(const MeshImporter& importer, const std::string& bytes,
                     const std::string& format, const CancelToken& token = CancelToken()) {
@@ -40,9 +41,9 @@ TEST(MeshImporterTest, ImportsInAChildProcess) {
 
 TEST(MeshImporterTest, ReportsTheChildsRefusalAndCrash) {
   const MeshImporter importer({.helper_path = kHelper});
-  EXPECT_NE(ErrorOf(importer, "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n", "off")
-                .find("names vertex 7"),
-            std::string::npos);
+  EXPECT_NE(
+      ErrorOf(importer, "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n", "off").find("names vertex 7"),
+      std::string::npos);
   // assimp 5.2 dereferences past the end of this binary PLY (cut 27 bytes short): the child
   // dies of a signal (or refuses it), this process goes on.
   std::string ply =
@@ -62,7 +63,8 @@ TEST(MeshImporterTest, KillsAHelperThatHangsAndRefusesGarbage) {
   std::ofstream(hang) << "#!/bin/sh\nexec sleep 60\n";
   ::chmod(hang.c_str(), 0755);
   const MeshImporter hanging({.helper_path = hang, .timeout = std::chrono::milliseconds(200)});
-  EXPECT_NE(ErrorOf(hanging, kTetra, "off").find("did not finish within 200 ms"), std::string::npos);
+  EXPECT_NE(ErrorOf(hanging, kTetra, "off").find("did not finish within 200 ms"),
+            std::string::npos);
 
   // cat echoes the request: not a reply.
   const MeshImporter echo({.helper_path = "/bin/cat"});

@@ -8,9 +8,9 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <string>
-#include <limits>
 #include <vector>
 
 #include "core/common/error.h"
@@ -320,7 +320,8 @@ TEST_F(MeshLoaderTest, RejectsNonPositiveScale) {
 std::string TriangleGltf(const std::string& uri) {
   return R"({"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
   "nodes": [{"mesh": 0}], "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
-  "buffers": [{"byteLength": 36, "uri": ")" + uri + R"("}],
+  "buffers": [{"byteLength": 36, "uri": ")" +
+         uri + R"("}],
   "bufferViews": [{"buffer": 0, "byteLength": 36}],
   "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
                  "min": [0, 0, 0], "max": [1, 1, 0]}]})";
@@ -359,11 +360,13 @@ TEST_F(MeshLoaderTest, NeverOpensFilesNamedInsideAMesh) {
 TEST_F(MeshLoaderTest, RefusesDeclaredCountsTheBytesCannotHold) {
   const std::vector<std::pair<std::string, std::string>> bad = {
       {"off", "OFF\n1000000000 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"},  // 45 bytes
-      {"off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n"},            // index past vertices
-      {"off", "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0"},                  // cut short
-      {"ply", "ply\nformat ascii 1.0\n"},                                   // header never ends
-      {"ply", "ply\nformat binary_little_endian 1.0\nelement vertex 20000000\nproperty float x\n"
-              "property float y\nproperty float z\nend_header\n" + std::string(64, '\0')},
+      {"off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n"},           // index past vertices
+      {"off", "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0"},                 // cut short
+      {"ply", "ply\nformat ascii 1.0\n"},                              // header never ends
+      {"ply",
+       "ply\nformat binary_little_endian 1.0\nelement vertex 20000000\nproperty float x\n"
+       "property float y\nproperty float z\nend_header\n" +
+           std::string(64, '\0')},
       {"obj", "OFF\n99999999 0 0\n"},  // the content decides, not the hint
   };
   for (const auto& [format, bytes] : bad) {
@@ -399,8 +402,8 @@ TEST(MeshWireTest, RoundTripsAndRefusesMalformedReplies) {
   Mesh nan = mesh;
   nan.vertices[1].x() = std::numeric_limits<double>::quiet_NaN();
   for (const std::string& bad :
-       {std::string("garbage"), good.substr(0, good.size() - 1), good + "x",
-        EncodeMeshReply(past), EncodeMeshReply(nan), std::string("HGMR\1\0\0\0\7\0\0\0")}) {
+       {std::string("garbage"), good.substr(0, good.size() - 1), good + "x", EncodeMeshReply(past),
+        EncodeMeshReply(nan), std::string("HGMR\1\0\0\0\7\0\0\0")}) {
     const MeshReply reply = DecodeMeshReply(bad, limits);
     EXPECT_EQ(reply.mesh, nullptr);
     EXPECT_FALSE(reply.malformed.empty());
