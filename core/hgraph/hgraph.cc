@@ -19,18 +19,7 @@ HGraph::HGraph(const Space& space, std::vector<InputPath> paths, double endpoint
   }
   if (paths_.empty()) throw InputError("paths", "at least one input path is required");
   for (size_t p = 0; p < paths_.size(); ++p) {
-    InputPath& path = paths_[p];
-    const std::string field = "paths[" + std::to_string(p) + "]";
-    if (path.name.empty()) path.name = "path" + std::to_string(p);
-    if (path.waypoints.size() < 2) {
-      throw InputError(field + ".waypoints", "path '" + path.name + "' has " +
-                                                 std::to_string(path.waypoints.size()) +
-                                                 " waypoint(s); at least 2 are required");
-    }
-    for (size_t j = 0; j < path.waypoints.size(); ++j) {
-      space.Validate(path.waypoints[j], field + ".waypoints[" + std::to_string(j) + "]");
-      path.waypoints[j] = space.Normalize(path.waypoints[j]);
-    }
+    PrepareWaypoints(space, static_cast<int>(p), "paths[" + std::to_string(p) + "]", paths_[p]);
   }
   const Config& start = paths_[0].waypoints.front();
   const Config& goal = paths_[0].waypoints.back();
@@ -60,9 +49,9 @@ HGraph::HGraph(const Space& space, std::vector<InputPath> paths, double endpoint
   for (int p = 0; p < num_paths(); ++p) AppendPath(space, p, max_node_spacing);
 }
 
-int HGraph::AddPath(const Space& space, InputPath path, double endpoint_tolerance,
-                    double max_node_spacing, const std::string& field) {
-  if (path.name.empty()) path.name = "path" + std::to_string(num_paths());
+void HGraph::PrepareWaypoints(const Space& space, int index, const std::string& field,
+                              InputPath& path) {
+  if (path.name.empty()) path.name = "path" + std::to_string(index);
   if (path.waypoints.size() < 2) {
     throw InputError(field + ".waypoints", "path '" + path.name + "' has " +
                                                std::to_string(path.waypoints.size()) +
@@ -72,6 +61,19 @@ int HGraph::AddPath(const Space& space, InputPath path, double endpoint_toleranc
     space.Validate(path.waypoints[j], field + ".waypoints[" + std::to_string(j) + "]");
     path.waypoints[j] = space.Normalize(path.waypoints[j]);
   }
+}
+
+int HGraph::AddPath(const Space& space, InputPath path, double endpoint_tolerance,
+                    double max_node_spacing, const std::string& field) {
+  path = CheckedPath(space, std::move(path), endpoint_tolerance, field);
+  paths_.push_back(std::move(path));
+  AppendPath(space, num_paths() - 1, max_node_spacing);
+  return num_paths() - 1;
+}
+
+InputPath HGraph::CheckedPath(const Space& space, InputPath path, double endpoint_tolerance,
+                              const std::string& field) const {
+  PrepareWaypoints(space, num_paths(), field, path);
   const double ds = space.Distance(path.waypoints.front(), node(start_id()).q);
   if (ds > endpoint_tolerance) {
     throw InputError(field + ".waypoints[0]", "path '" + path.name + "' starts " +
@@ -86,9 +88,7 @@ int HGraph::AddPath(const Space& space, InputPath path, double endpoint_toleranc
                          " away from the H-Graph's goal (tolerance " +
                          std::to_string(endpoint_tolerance) + ")");
   }
-  paths_.push_back(std::move(path));
-  AppendPath(space, num_paths() - 1, max_node_spacing);
-  return num_paths() - 1;
+  return path;
 }
 
 void HGraph::AppendPath(const Space& space, int p, double max_node_spacing) {

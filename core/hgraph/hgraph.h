@@ -57,6 +57,10 @@ class HGraph {
   // its edges, unchecked. Returns its index. Bridges to it are the caller's.
   int AddPath(const Space& space, InputPath path, double endpoint_tolerance,
               double max_node_spacing, const std::string& field);
+  // The path as AddPath would add it (named, waypoints validated and normalised, endpoints
+  // checked), without adding it. Throws as AddPath does, but for the subdivision limits.
+  InputPath CheckedPath(const Space& space, InputPath path, double endpoint_tolerance,
+                        const std::string& field) const;
 
   // Adds a node outside every input path (path = -1; the post-optimization's shortcut points)
   // and returns its id.
@@ -86,6 +90,10 @@ class HGraph {
   int FindEdge(int u, int v) const;
 
  private:
+  // Names an unnamed path "path<index>", requires two waypoints, validates and normalises them
+  // (errors name `field`).
+  static void PrepareWaypoints(const Space& space, int index, const std::string& field,
+                               InputPath& path);
   void AppendPath(const Space& space, int p, double max_node_spacing);
   static constexpr int start_id() { return 0; }
   static constexpr int goal_id() { return 1; }

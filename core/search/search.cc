@@ -76,13 +76,13 @@ double WidestPathValue(const HGraph& graph, const SearchEdgeFn& edge) {
   return width[graph.goal()];
 }
 
-SearchResult Extract(const HGraph& graph, const Tree& tree) {
+// The start-goal path found by following `via_edge` back from the goal, with its value.
+SearchResult PathTo(const HGraph& graph, const std::vector<int>& via_edge, double value) {
   SearchResult result;
-  if (tree.value[graph.goal()] == kInf) return result;
   int node = graph.goal();
   result.nodes.push_back(node);
   while (node != graph.start()) {
-    const int e = tree.via_edge[node];
+    const int e = via_edge[node];
     HGRAPH_CHECK(e >= 0);
     result.edges.push_back(e);
     const HEdge& edge = graph.edge(e);
@@ -92,8 +92,13 @@ SearchResult Extract(const HGraph& graph, const Tree& tree) {
   std::reverse(result.nodes.begin(), result.nodes.end());
   std::reverse(result.edges.begin(), result.edges.end());
   result.found = true;
-  result.value = tree.value[graph.goal()];
+  result.value = value;
   return result;
+}
+
+SearchResult Extract(const HGraph& graph, const Tree& tree) {
+  if (tree.value[graph.goal()] == kInf) return SearchResult{};
+  return PathTo(graph, tree.via_edge, tree.value[graph.goal()]);
 }
 
 // One entry of the lazy open list: `node` reached through `edge` from a settled node whose value
@@ -186,23 +191,8 @@ SearchResult LazySearch(const HGraph& graph, const SearchEdgeFn& see, const Exac
       open.push(LazyEntry{.key = key, .parent_value = value[top.node], .node = v, .edge = e});
     }
   }
-  SearchResult result;
-  if (!closed[graph.goal()]) return result;
-  int node = graph.goal();
-  result.nodes.push_back(node);
-  while (node != graph.start()) {
-    const int e = via_edge[node];
-    HGRAPH_CHECK(e >= 0);
-    result.edges.push_back(e);
-    const HEdge& edge = graph.edge(e);
-    node = edge.u == node ? edge.v : edge.u;
-    result.nodes.push_back(node);
-  }
-  std::reverse(result.nodes.begin(), result.nodes.end());
-  std::reverse(result.edges.begin(), result.edges.end());
-  result.found = true;
-  result.value = value[graph.goal()];
-  return result;
+  if (!closed[graph.goal()]) return SearchResult{};
+  return PathTo(graph, via_edge, value[graph.goal()]);
 }
 
 }  // namespace
