@@ -280,13 +280,8 @@ int64_t HybridizationSession::AddPaths(const std::vector<InputPath>& paths,
   const Space& space = checker_->space();
   if (paths.empty()) throw InputError("paths", "at least one path is required");
   // Validate every path before the H-Graph changes.
-  {
-    HGraph probe = graph_;
-    for (size_t i = 0; i < paths.size(); ++i) {
-      probe.AddPath(space, paths[i], options_.endpoint_tolerance, options_.max_node_spacing,
-                    "paths[" + std::to_string(i) + "]");
-    }
-  }
+  graph_.CheckNewPaths(space, paths, options_.endpoint_tolerance, options_.max_node_spacing,
+                       "paths");
   const double reach = options_.candidates.variant == Variant::kAllPairs
                            ? std::numeric_limits<double>::infinity()
                        : build_stats_.radius > 0 ? build_stats_.radius
