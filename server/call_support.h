@@ -17,16 +17,12 @@
 #include "hgraph/v1/service.pb.h"
 #include "server/scene_store.h"
 #include "server/service.h"
+#include "server/status/status.h"
 #include "server/worker_pool.h"
 
 namespace hgraph::server {
 
 using Clock = std::chrono::steady_clock;
-
-// The canonical name of a gRPC status code ("INVALID_ARGUMENT").
-const char* CodeName(grpc::StatusCode code);
-// The canonical code an engine error maps to.
-grpc::StatusCode ToGrpcCode(ErrorCode code);
 
 // Runs `body` and turns whatever it throws into a canonical status. A cancellation that comes
 // from the passed deadline (gRPC cancels the call at the deadline too) is DEADLINE_EXCEEDED.
