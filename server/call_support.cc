@@ -68,15 +68,14 @@ void PathMergerService::RecordCall(const std::string& method, const std::string&
   const std::string type = method == "MergePaths" || method == "PlanPaths" ? "server_stream"
                            : method == "UploadBlob"                        ? "client_stream"
                                                                            : "unary";
-  metrics_.Increment("grpc_server_started_total",
-                     {{"grpc_type", type}, {"grpc_service", kService}, {"grpc_method", method}});
-  metrics_.Increment("grpc_server_handled_total", {{"grpc_type", type},
-                                                   {"grpc_service", kService},
-                                                   {"grpc_method", method},
-                                                   {"grpc_code", code}});
-  metrics_.Observe("grpc_server_handling_seconds",
-                   {{"grpc_type", type}, {"grpc_service", kService}, {"grpc_method", method}},
-                   seconds);
+  families_.rpc_started.Increment(
+      {{"grpc_type", type}, {"grpc_service", kService}, {"grpc_method", method}});
+  families_.rpc_handled.Increment({{"grpc_type", type},
+                                   {"grpc_service", kService},
+                                   {"grpc_method", method},
+                                   {"grpc_code", code}});
+  families_.rpc_handling_seconds.Observe(
+      {{"grpc_type", type}, {"grpc_service", kService}, {"grpc_method", method}}, seconds);
   if (status.ok()) {
     spdlog::info("{} session={} status={} duration_ms={:.1f}", method,
                  session.empty() ? "-" : session, code, seconds * 1e3);
@@ -88,24 +87,19 @@ void PathMergerService::RecordCall(const std::string& method, const std::string&
 
 void PathMergerService::RecordMerge(const std::string& method, const v1::MergeResult& result) {
   const Labels labels = {{"method", method}};
-  metrics_.Increment("hgraph_merges_total", labels);
+  families_.merges.Increment(labels);
   const v1::MergeStats& stats = result.stats();
-  metrics_.Increment("hgraph_merge_collision_checks_total", labels,
-                     static_cast<double>(stats.collision_checks()));
-  metrics_.Increment("hgraph_merge_distance_queries_total", labels,
-                     static_cast<double>(stats.distance_queries()));
-  metrics_.Increment("hgraph_merge_edges_checked_total", labels,
-                     static_cast<double>(stats.edges_checked()));
-  metrics_.Increment("hgraph_merge_edges_reused_total", labels,
-                     static_cast<double>(stats.edges_reused()));
+  families_.collision_checks.Increment(labels, static_cast<double>(stats.collision_checks()));
+  families_.distance_queries.Increment(labels, static_cast<double>(stats.distance_queries()));
+  families_.edges_checked.Increment(labels, static_cast<double>(stats.edges_checked()));
+  families_.edges_reused.Increment(labels, static_cast<double>(stats.edges_reused()));
   const v1::Timing& t = result.timing();
   const std::pair<const char*, double> phases[] = {
       {"validate", t.validate_ms()},     {"inputs", t.inputs_ms()}, {"align", t.align_ms()},
       {"candidates", t.candidates_ms()}, {"check", t.check_ms()},   {"search", t.search_ms()},
       {"evaluate", t.evaluate_ms()}};
   for (const auto& [phase, ms] : phases) {
-    metrics_.Observe("hgraph_merge_phase_seconds", {{"method", method}, {"phase", phase}},
-                     ms / 1e3);
+    families_.merge_phase_seconds.Observe({{"method", method}, {"phase", phase}}, ms / 1e3);
   }
 }
 

@@ -65,7 +65,7 @@ void ValidateDigest(const v1::Digest& digest, const std::string& field) {
   }
 }
 
-SceneStore::SceneStore(ResourceCache& cache, Metrics& metrics, MeshImporter importer)
+SceneStore::SceneStore(ResourceCache& cache, ServiceMetrics& metrics, MeshImporter importer)
     : cache_(cache), metrics_(metrics), importer_(std::move(importer)) {}
 
 bool SceneStore::HasBlob(const v1::Digest& digest) const {
@@ -140,7 +140,7 @@ LoadedScene SceneStore::Get(const v1::Digest& digest, const std::string& field,
     if (auto world = cache_.Get<const CollisionWorld>(CacheKind::kWorld, sha)) {
       auto proto = cache_.Get<const v1::Scene>(CacheKind::kScene, sha);
       if (proto) {
-        metrics_.Increment("hgraph_scene_cache_hits_total", {});
+        metrics_.scene_cache_hits.Increment();
         return LoadedScene{proto, world};
       }
     }
@@ -152,10 +152,10 @@ LoadedScene SceneStore::Get(const v1::Digest& digest, const std::string& field,
   }
   if (pending.valid()) {
     // Another call is loading the same scene: this one shares its result.
-    metrics_.Increment("hgraph_scene_cache_hits_total", {});
+    metrics_.scene_cache_hits.Increment();
     return pending.get();
   }
-  metrics_.Increment("hgraph_scene_cache_misses_total", {});
+  metrics_.scene_cache_misses.Increment();
   try {
     LoadedScene loaded = Load(sha, field, token);
     promise.set_value(loaded);
@@ -199,7 +199,7 @@ LoadedScene SceneStore::Load(const std::string& sha, const std::string& field,
     throw;
   }
   auto world = std::make_shared<const CollisionWorld>(scene);
-  metrics_.Increment("hgraph_scene_loads_total", {});
+  metrics_.scene_loads.Increment();
   cache_.Put(CacheKind::kWorld, sha, world, world->memory_bytes());
   return LoadedScene{proto, world};
 }

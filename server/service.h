@@ -95,6 +95,7 @@ class PathMergerService final : public v1::PathMerger::CallbackService {
 
   ServerOptions options_;
   Metrics& metrics_;
+  ServiceMetrics families_;  // declared in metrics_; before scenes_, which counts into them
   ResourceCache cache_;
   SceneStore scenes_;
   SessionRegistry sessions_;

@@ -197,12 +197,9 @@ grpc::ServerUnaryReactor* PathMergerService::CheckPaths(grpc::CallbackServerCont
         response->set_resolution(resolution);
         response->set_elapsed_ms(result.elapsed_ms);
         const Labels labels = {{"method", "CheckPaths"}};
-        metrics_.Increment("hgraph_merge_collision_checks_total", labels,
-                           static_cast<double>(result.collision_checks));
-        metrics_.Increment("hgraph_merge_distance_queries_total", labels,
-                           static_cast<double>(result.distance_queries));
-        metrics_.Increment("hgraph_merge_edges_checked_total", labels,
-                           static_cast<double>(result.edges_checked));
+        families_.collision_checks.Increment(labels, static_cast<double>(result.collision_checks));
+        families_.distance_queries.Increment(labels, static_cast<double>(result.distance_queries));
+        families_.edges_checked.Increment(labels, static_cast<double>(result.edges_checked));
       },
       /*on_worker=*/true);
   return call;
