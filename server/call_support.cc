@@ -11,6 +11,12 @@ namespace {
 
 constexpr char kService[] = "hgraph.v1.PathMerger";
 
+const char* CallType(const std::string& method) {
+  if (method == "MergePaths" || method == "PlanPaths") return "server_stream";
+  if (method == "UploadBlob") return "client_stream";
+  return "unary";
+}
+
 }  // namespace
 
 grpc::Status Invoke(const std::function<void()>& body, const CancelToken& token) {
@@ -61,15 +67,17 @@ void CheckBatchLimits(const v1::PathSet& paths, const ServerOptions& options) {
   }
 }
 
+Clock::time_point PathMergerService::RecordStart(const std::string& method) {
+  families_.rpc_started.Increment(
+      {{"grpc_type", CallType(method)}, {"grpc_service", kService}, {"grpc_method", method}});
+  return Clock::now();
+}
+
 void PathMergerService::RecordCall(const std::string& method, const std::string& session,
                                    Clock::time_point started, const grpc::Status& status) {
   const double seconds = std::chrono::duration<double>(Clock::now() - started).count();
   const char* code = GrpcCodeName(status.error_code());
-  const std::string type = method == "MergePaths" || method == "PlanPaths" ? "server_stream"
-                           : method == "UploadBlob"                        ? "client_stream"
-                                                                           : "unary";
-  families_.rpc_started.Increment(
-      {{"grpc_type", type}, {"grpc_service", kService}, {"grpc_method", method}});
+  const std::string type = CallType(method);
   families_.rpc_handled.Increment({{"grpc_type", type},
                                    {"grpc_service", kService},
                                    {"grpc_method", method},

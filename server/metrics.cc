@@ -241,7 +241,7 @@ MetricsHttpServer::MetricsHttpServer(const Metrics& metrics, const std::string& 
   context_ = mg_start(nullptr, nullptr, options);
   if (context_ == nullptr) {
     mg_exit_library();
-    throw Error(ErrorCode::kFailedPrecondition, "--metrics-address", "cannot listen on " + address);
+    throw Error(ErrorCode::kFailedPrecondition, "--metrics-listen", "cannot listen on " + address);
   }
   mg_set_request_handler(context_, "/metrics", HandleMetrics, const_cast<Metrics*>(&metrics_));
   mg_server_port ports[1] = {};

@@ -134,7 +134,7 @@ class PathMergerService::PlanCall final : public grpc::ServerWriteReactor<v1::Pl
 
   PathMergerService* service_;
   const v1::PlanPathsRequest* request_;
-  Clock::time_point started_ = Clock::now();
+  Clock::time_point started_ = service_->RecordStart("PlanPaths");
   CancelToken token_;
   std::mutex mutex_;
   std::deque<v1::PlanPathsResponse> queue_;
@@ -160,7 +160,7 @@ grpc::ServerWriteReactor<v1::PlanPathsResponse>* PathMergerService::PlanPaths(
   const grpc::Status status(grpc::StatusCode::UNIMPLEMENTED,
                             "PlanPaths: this server was built without core/plan (the OMPL "
                             "input planners); generate paths on the client");
-  RecordCall("PlanPaths", request->session(), Clock::now(), status);
+  RecordCall("PlanPaths", request->session(), RecordStart("PlanPaths"), status);
   return new Unimplemented(status);
 }
 #endif

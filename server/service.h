@@ -90,6 +90,8 @@ class PathMergerService final : public v1::PathMerger::CallbackService {
   class MergeCall;
   class PlanCall;
 
+  // Counts the call as started (grpc_server_started_total) and returns its start time.
+  std::chrono::steady_clock::time_point RecordStart(const std::string& method);
   void DropHGraphs(const std::vector<std::string>& names);
   void RecordMerge(const std::string& method, const v1::MergeResult& result);
 

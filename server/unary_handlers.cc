@@ -54,7 +54,7 @@ class PathMergerService::UnaryCall final : public grpc::ServerUnaryReactor {
   PathMergerService* service_;
   std::string method_;
   std::string session_;
-  Clock::time_point started_ = Clock::now();
+  Clock::time_point started_ = service_->RecordStart(method_);
   CancelToken token_;
 };
 
