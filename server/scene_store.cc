@@ -19,7 +19,12 @@ std::string CanonicalBytes(const v1::Scene& scene) {
     google::protobuf::io::StringOutputStream stream(&bytes);
     google::protobuf::io::CodedOutputStream coded(&stream);
     coded.SetSerializationDeterministic(true);
-    scene.SerializeToCodedStream(&coded);
+    if (!scene.SerializeToCodedStream(&coded) || coded.HadError()) {
+      // Only a message past protobuf's 2 GiB limit fails here; gRPC's own limit is far lower.
+      throw Error(ErrorCode::kResourceExhausted, "scene",
+                  "cannot be serialized (" + std::to_string(scene.ByteSizeLong()) +
+                      " bytes); store a smaller scene");
+    }
   }
   return bytes;
 }
@@ -200,7 +205,14 @@ LoadedScene SceneStore::Load(const std::string& sha, const std::string& field,
   }
   auto world = std::make_shared<const CollisionWorld>(scene);
   metrics_.scene_loads.Increment();
-  cache_.Put(CacheKind::kWorld, sha, world, world->memory_bytes());
+  // A world that cannot be kept would be loaded again by every call that names the scene.
+  if (!cache_.Put(CacheKind::kWorld, sha, world, world->memory_bytes())) {
+    throw Error(ErrorCode::kResourceExhausted, field,
+                "scene sha256:" + sha + " needs " + std::to_string(world->memory_bytes()) +
+                    " bytes of collision geometry, more than the server's cache budget "
+                    "(--cache-bytes=" +
+                    std::to_string(cache_.budget_bytes()) + ")");
+  }
   return LoadedScene{proto, world};
 }
 
