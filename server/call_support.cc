@@ -67,6 +67,27 @@ void CheckBatchLimits(const v1::PathSet& paths, const ServerOptions& options) {
   }
 }
 
+MergeResult QueryStored(PathMergerService::StoredHGraph& stored, const MeasureSpec& measure,
+                        const ProgressCallback& progress, const CancelToken& token) {
+  std::unique_ptr<HybridizationSession> copy;
+  uint64_t version = 0;
+  {
+    std::lock_guard lock(stored.mutex);
+    copy = std::make_unique<HybridizationSession>(stored.session->Clone());
+    version = stored.version;
+  }
+  MergeResult result = copy->Query(measure, progress, token);
+  {
+    std::lock_guard lock(stored.mutex);
+    if (stored.version == version) {
+      // The old session goes when `copy` does, outside the lock.
+      std::swap(stored.session, copy);
+      ++stored.version;
+    }
+  }
+  return result;
+}
+
 Clock::time_point PathMergerService::RecordStart(const std::string& method) {
   families_.rpc_started.Increment(
       {{"grpc_type", CallType(method)}, {"grpc_service", kService}, {"grpc_method", method}});

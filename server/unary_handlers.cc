@@ -151,8 +151,7 @@ grpc::ServerUnaryReactor* PathMergerService::Requery(grpc::CallbackServerContext
                           "never built here); merge the paths again");
         }
         const MeasureSpec measure = MeasureFromProto(request->measure());
-        std::lock_guard lock(stored->mutex);
-        const MergeResult result = stored->session->Query(measure, {}, token);
+        const MergeResult result = QueryStored(*stored, measure, {}, token);
         *response->mutable_result() = MergeResultToProto(result);
         response->set_hgraph(request->hgraph());
         RecordMerge("Requery", response->result());

@@ -551,9 +551,20 @@ def test_cli_remote_deadline(server, tmp_path):
     assert late.returncode == 3 and "DEADLINE_EXCEEDED" in late.stderr, late.stderr
 
 
-def test_started_total_counts_a_call_in_flight(server, client):
+def test_started_total_counts_a_call_in_flight():
     """grpc_server_started_total goes up when a call starts, handled_total when it ends: while a
-    merge runs, started exceeds handled by one for MergePaths."""
+    merge runs, started exceeds handled by one for MergePaths (on a server of its own, so that no
+    other test's call is in flight)."""
+    server = Server()
+    try:
+        with server.client() as client:
+            client.create_session(client.upload_scene(DATA / "scene.json"))
+            started_total_in_flight(server, client)
+    finally:
+        assert server.stop() == 0, "".join(server.log)
+
+
+def started_total_in_flight(server, client):
     def counts():
         return (server.metric("grpc_server_started_total", grpc_method="MergePaths"),
                 server.metric("grpc_server_handled_total", grpc_method="MergePaths"))
