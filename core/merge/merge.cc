@@ -12,6 +12,7 @@
 #include <limits>
 #include <mutex>
 
+#include "core/common/client_text.h"
 #include "core/common/error.h"
 #include "core/common/parallel.h"
 #include "core/merge/path_check.h"
@@ -129,7 +130,7 @@ Evaluation ParseEvaluation(const std::string& name, const std::string& field) {
   for (Evaluation e : {Evaluation::kLazy, Evaluation::kEager}) {
     if (name == EvaluationName(e)) return e;
   }
-  throw InputError(field, "unknown evaluation '" + name + "' (expected lazy or eager)");
+  throw InputError(field, "unknown evaluation '" + ClientText(name) + "' (expected lazy or eager)");
 }
 
 HybridizationSession::HybridizationSession(const MotionChecker& checker,
@@ -212,27 +213,27 @@ void HybridizationSession::CheckEdges(const std::vector<int>& edge_ids, bool nee
   const ProgressReporter reporter(progress, phase, total, *checker_, Clock::now());
   std::atomic<int64_t> done{0};
   RunWithThreads(ResolveThreads(options_.threads), [&] {
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, edge_ids.size(), 1),
-                      [&](const tbb::blocked_range<size_t>& range) {
-                        for (size_t k = range.begin(); k != range.end(); ++k) {
-                          if (cancel.stopped()) return;
-                          HEdge& edge = graph_.mutable_edge(edge_ids[k]);
-                          const EdgeReport previous = std::move(edge.report);
-                          edge.report = checker_->CheckEdge(
-                              EdgeCheckRequest{.from = &graph_.node(edge.u).q,
-                                               .to = &graph_.node(edge.v).q,
-                                               .mode = !(need_clearance || edge.input) ? EdgeCheckMode::kSampled
-                                                       : previous.state == EdgeState::kValid
-                                                           ? EdgeCheckMode::kClearanceOfValid
-                                                           : EdgeCheckMode::kClearance});
-                          // A re-check for clearance keeps counting what the first check cost.
-                          if (previous.state != EdgeState::kUnchecked) {
-                            edge.report.collision_checks += previous.collision_checks;
-                            edge.report.distance_queries += previous.distance_queries;
-                          }
-                          reporter.Done(done.fetch_add(1, std::memory_order_relaxed) + 1);
-                        }
-                      });
+    tbb::parallel_for(
+        tbb::blocked_range<size_t>(0, edge_ids.size(), 1),
+        [&](const tbb::blocked_range<size_t>& range) {
+          for (size_t k = range.begin(); k != range.end(); ++k) {
+            if (cancel.stopped()) return;
+            HEdge& edge = graph_.mutable_edge(edge_ids[k]);
+            const EdgeReport previous = std::move(edge.report);
+            edge.report = checker_->CheckEdge(EdgeCheckRequest{
+                .from = &graph_.node(edge.u).q,
+                .to = &graph_.node(edge.v).q,
+                .mode = !(need_clearance || edge.input)       ? EdgeCheckMode::kSampled
+                        : previous.state == EdgeState::kValid ? EdgeCheckMode::kClearanceOfValid
+                                                              : EdgeCheckMode::kClearance});
+            // A re-check for clearance keeps counting what the first check cost.
+            if (previous.state != EdgeState::kUnchecked) {
+              edge.report.collision_checks += previous.collision_checks;
+              edge.report.distance_queries += previous.distance_queries;
+            }
+            reporter.Done(done.fetch_add(1, std::memory_order_relaxed) + 1);
+          }
+        });
   });
   cancel.ThrowIfStopped();
   *checked += total;
