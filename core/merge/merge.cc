@@ -352,12 +352,12 @@ SearchResult HybridizationSession::SearchBest(const Measure& measure, bool profi
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const ExactFn exact = [&](int e) {
     const EdgeReport& report = graph_.edge(e).report;
-    return report.state == EdgeState::kInvalid ||
+    return !report.usable() ||
            (report.state == EdgeState::kValid && (!needs_clearance || report.has_clearance));
   };
   const SearchEdgeFn see = [&](int e) {
     const EdgeReport& report = graph_.edge(e).report;
-    if (report.state == EdgeState::kInvalid) {
+    if (!report.usable()) {
       return SearchEdge{.value = nan, .length = edge_length_[e]};
     }
     if (exact(e)) return SearchEdge{.value = measure.EdgeValue(report), .length = edge_length_[e]};
@@ -397,9 +397,10 @@ SearchResult HybridizationSession::SearchBest(const Measure& measure, bool profi
             ErrorCode::kFailedPrecondition, "measure.safety",
             "no path in the H-Graph keeps clearance >= " + std::to_string(measure.spec().safety));
       }
-      throw Error(ErrorCode::kFailedPrecondition, "paths",
-                  "the valid edges of the H-Graph do not connect start and goal (are the "
-                  "inputs valid?)");
+      throw Error(
+          ErrorCode::kFailedPrecondition, "paths",
+          "the valid, certified edges of the H-Graph do not connect start and goal (are the "
+          "inputs valid?)");
     }
     if (!profile) return best;
     phase = Clock::now();
@@ -411,7 +412,8 @@ SearchResult HybridizationSession::SearchBest(const Measure& measure, bool profi
     result->timing.evaluate_ms += MsSince(phase);
     bool still_valid = true;
     for (int e : output_recheck) {
-      still_valid = still_valid && graph_.edge(e).report.state == EdgeState::kValid;
+      const EdgeReport& report = graph_.edge(e).report;
+      still_valid = still_valid && report.state == EdgeState::kValid && report.usable();
     }
     if (still_valid) return best;
   }
