@@ -15,6 +15,7 @@
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
+#include <limits>
 #include <memory>
 #include <string>
 
@@ -45,6 +46,7 @@ struct Flags {
   int64_t mesh_import_memory_mb = 1024;
   int mesh_import_cpu_s = 20;
   double mesh_import_timeout_s = 30;
+  double upload_idle_timeout_s = 30;
 };
 
 }  // namespace
@@ -65,9 +67,10 @@ int main(int argc, char** argv) {
                  "calls queued or running on the workers before RESOURCE_EXHAUSTED")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
+  // gRPC takes the limit as an int.
   app.add_option("--max-message-bytes", flags.max_message_bytes,
                  "largest gRPC message received or sent")
-      ->check(CLI::PositiveNumber)
+      ->check(CLI::Range(int64_t{1}, int64_t{std::numeric_limits<int>::max()}))
       ->capture_default_str();
   app.add_option("--max-paths", flags.max_paths, "input paths per MergePaths batch")
       ->check(CLI::PositiveNumber)
@@ -116,7 +119,13 @@ int main(int argc, char** argv) {
                  "wall-clock limit of each mesh import (the call's deadline, if sooner, wins)")
       ->check(CLI::Range(0.1, 3600.0))
       ->capture_default_str();
-  app.add_option("--log-level", flags.log_level, "trace, debug, info, warn, error")
+  app.add_option("--upload-idle-timeout-s", flags.upload_idle_timeout_s,
+                 "an UploadBlob stream that sends nothing for this long is aborted (ABORTED) and "
+                 "its reserved bytes and admission slot released")
+      ->check(CLI::Range(0.5, 86400.0))
+      ->capture_default_str();
+  app.add_option("--log-level", flags.log_level, "log verbosity")
+      ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}))
       ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
 
@@ -149,7 +158,9 @@ int main(int argc, char** argv) {
                       .memory_mb = flags.mesh_import_memory_mb,
                       .cpu_s = flags.mesh_import_cpu_s,
                       .timeout = std::chrono::milliseconds(
-                          static_cast<int64_t>(flags.mesh_import_timeout_s * 1e3))}};
+                          static_cast<int64_t>(flags.mesh_import_timeout_s * 1e3))},
+      .upload_idle_timeout =
+          std::chrono::milliseconds(static_cast<int64_t>(flags.upload_idle_timeout_s * 1e3))};
 
   try {
     hgraph::server::MeshImporter(options.mesh_import).CheckHelper();
@@ -184,12 +195,15 @@ int main(int argc, char** argv) {
     std::printf("hgraph-server ready grpc_port=%d metrics_port=%d\n", port, metrics_port);
     std::fflush(stdout);
 
-    // The main thread waits for a signal and expires idle sessions once a second.
+    // The main thread waits for a signal and expires idle sessions and uploads once a second.
     const timespec tick{.tv_sec = 1, .tv_nsec = 0};
     int signal = -1;
     while (signal < 0) {
       signal = sigtimedwait(&signals, nullptr, &tick);
-      if (signal < 0) service.ExpireIdleSessions();
+      if (signal < 0) {
+        service.ExpireIdleSessions();
+        service.ExpireIdleUploads();
+      }
     }
     spdlog::info("received signal {}: draining for {} s, then shutting down (grace {} s)", signal,
                  flags.drain_s, flags.grace_s);

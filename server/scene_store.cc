@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "core/adapter/scene_proto.h"
+#include "core/common/client_text.h"
 #include "core/common/digest.h"
 #include "core/common/error.h"
 
@@ -19,7 +20,12 @@ std::string CanonicalBytes(const v1::Scene& scene) {
     google::protobuf::io::StringOutputStream stream(&bytes);
     google::protobuf::io::CodedOutputStream coded(&stream);
     coded.SetSerializationDeterministic(true);
-    scene.SerializeToCodedStream(&coded);
+    if (!scene.SerializeToCodedStream(&coded) || coded.HadError()) {
+      // Only a message past protobuf's 2 GiB limit fails here; gRPC's own limit is far lower.
+      throw Error(ErrorCode::kResourceExhausted, "scene",
+                  "cannot be serialized (" + std::to_string(scene.ByteSizeLong()) +
+                      " bytes); store a smaller scene");
+    }
   }
   return bytes;
 }
@@ -48,6 +54,16 @@ void CheckMesh(const v1::Shape& shape, const std::string& field, const SceneStor
   }
 }
 
+// A digest names its content by hash and size: a right hash with a wrong size is refused.
+void CheckSceneSize(const v1::Scene& scene, const v1::Digest& digest, const std::string& field) {
+  const int64_t size = static_cast<int64_t>(scene.ByteSizeLong());
+  if (size != digest.size_bytes()) {
+    throw InputError(field + ".size_bytes", "scene sha256:" + digest.sha256() + " is " +
+                                                std::to_string(size) + " bytes, the digest says " +
+                                                std::to_string(digest.size_bytes()));
+  }
+}
+
 }  // namespace
 
 std::string DigestText(const v1::Digest& digest) {
@@ -57,7 +73,7 @@ std::string DigestText(const v1::Digest& digest) {
 void ValidateDigest(const v1::Digest& digest, const std::string& field) {
   if (!IsSha256Hex(digest.sha256())) {
     throw InputError(field + ".sha256", "must be 64 lower-case hex digits, got \"" +
-                                            digest.sha256().substr(0, 80) + "\"");
+                                            ClientText(digest.sha256()) + "\"");
   }
   if (digest.size_bytes() < 0) {
     throw InputError(field + ".size_bytes",
@@ -65,7 +81,7 @@ void ValidateDigest(const v1::Digest& digest, const std::string& field) {
   }
 }
 
-SceneStore::SceneStore(ResourceCache& cache, Metrics& metrics, MeshImporter importer)
+SceneStore::SceneStore(ResourceCache& cache, ServiceMetrics& metrics, MeshImporter importer)
     : cache_(cache), metrics_(metrics), importer_(std::move(importer)) {}
 
 bool SceneStore::HasBlob(const v1::Digest& digest) const {
@@ -140,7 +156,8 @@ LoadedScene SceneStore::Get(const v1::Digest& digest, const std::string& field,
     if (auto world = cache_.Get<const CollisionWorld>(CacheKind::kWorld, sha)) {
       auto proto = cache_.Get<const v1::Scene>(CacheKind::kScene, sha);
       if (proto) {
-        metrics_.Increment("hgraph_scene_cache_hits_total", {});
+        CheckSceneSize(*proto, digest, field);
+        metrics_.scene_cache_hits.Increment();
         return LoadedScene{proto, world};
       }
     }
@@ -152,12 +169,12 @@ LoadedScene SceneStore::Get(const v1::Digest& digest, const std::string& field,
   }
   if (pending.valid()) {
     // Another call is loading the same scene: this one shares its result.
-    metrics_.Increment("hgraph_scene_cache_hits_total", {});
+    metrics_.scene_cache_hits.Increment();
     return pending.get();
   }
-  metrics_.Increment("hgraph_scene_cache_misses_total", {});
+  metrics_.scene_cache_misses.Increment();
   try {
-    LoadedScene loaded = Load(sha, field, token);
+    LoadedScene loaded = Load(digest, field, token);
     promise.set_value(loaded);
     std::lock_guard lock(loading_mutex_);
     loading_.erase(sha);
@@ -170,8 +187,9 @@ LoadedScene SceneStore::Get(const v1::Digest& digest, const std::string& field,
   }
 }
 
-LoadedScene SceneStore::Load(const std::string& sha, const std::string& field,
+LoadedScene SceneStore::Load(const v1::Digest& digest, const std::string& field,
                              const CancelToken& token) {
+  const std::string& sha = digest.sha256();
   auto proto = cache_.Get<const v1::Scene>(CacheKind::kScene, sha);
   if (!proto) {
     throw Error(ErrorCode::kNotFound, field,
@@ -179,8 +197,9 @@ LoadedScene SceneStore::Load(const std::string& sha, const std::string& field,
                     " is not held by this server (never stored, or evicted under the memory "
                     "budget); store it again with PutScene");
   }
-  BlobResolver resolver = [this](const v1::Digest& digest) -> std::optional<std::string> {
-    auto blob = cache_.Get<const std::string>(CacheKind::kBlob, digest.sha256());
+  CheckSceneSize(*proto, digest, field);
+  BlobResolver resolver = [this](const v1::Digest& blob_digest) -> std::optional<std::string> {
+    auto blob = cache_.Get<const std::string>(CacheKind::kBlob, blob_digest.sha256());
     if (!blob) return std::nullopt;
     return *blob;
   };
@@ -199,8 +218,15 @@ LoadedScene SceneStore::Load(const std::string& sha, const std::string& field,
     throw;
   }
   auto world = std::make_shared<const CollisionWorld>(scene);
-  metrics_.Increment("hgraph_scene_loads_total", {});
-  cache_.Put(CacheKind::kWorld, sha, world, world->memory_bytes());
+  metrics_.scene_loads.Increment();
+  // A world that cannot be kept would be loaded again by every call that names the scene.
+  if (!cache_.Put(CacheKind::kWorld, sha, world, world->memory_bytes())) {
+    throw Error(ErrorCode::kResourceExhausted, field,
+                "scene sha256:" + sha + " needs " + std::to_string(world->memory_bytes()) +
+                    " bytes of collision geometry, more than the server's cache budget "
+                    "(--cache-bytes=" +
+                    std::to_string(cache_.budget_bytes()) + ")");
+  }
   return LoadedScene{proto, world};
 }
 

@@ -28,7 +28,7 @@ struct LoadedScene {
 class SceneStore {
  public:
   // Mesh bytes are parsed by `importer`, in a child process per mesh.
-  SceneStore(ResourceCache& cache, Metrics& metrics, MeshImporter importer);
+  SceneStore(ResourceCache& cache, ServiceMetrics& metrics, MeshImporter importer);
   SceneStore(const SceneStore&) = delete;
   SceneStore& operator=(const SceneStore&) = delete;
 
@@ -46,16 +46,17 @@ class SceneStore {
 
   // The scene and its collision world, built on first use and shared by every session that
   // names the same digest; concurrent first uses wait for one load. Throws Error(kNotFound,
-  // field) if the scene (or a blob it needs) is not held.
+  // field) if the scene (or a blob it needs) is not held, InputError(field + ".size_bytes") if
+  // the digest's size is not the scene's.
   LoadedScene Get(const v1::Digest& digest, const std::string& field,
                   const CancelToken& token = CancelToken());
   bool HasScene(const v1::Digest& digest) const;
 
  private:
-  LoadedScene Load(const std::string& sha, const std::string& field, const CancelToken& token);
+  LoadedScene Load(const v1::Digest& digest, const std::string& field, const CancelToken& token);
 
   ResourceCache& cache_;
-  Metrics& metrics_;
+  ServiceMetrics& metrics_;
   MeshImporter importer_;
   std::mutex loading_mutex_;
   std::map<std::string, std::shared_future<LoadedScene>> loading_;

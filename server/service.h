@@ -7,6 +7,8 @@
 #include <chrono>
 #include <cstdint>
 #include <memory>
+#include <mutex>
+#include <set>
 #include <string>
 
 #include "hgraph/v1/service.grpc.pb.h"
@@ -31,6 +33,8 @@ struct ServerOptions {
   std::chrono::milliseconds session_ttl{std::chrono::hours(1)};
   int progress_interval_ms = 100;
   MeshImportLimits mesh_import;  // how client mesh bytes are parsed (out of process)
+  // An UploadBlob stream that sends nothing for this long is aborted (ExpireIdleUploads).
+  std::chrono::milliseconds upload_idle_timeout{std::chrono::seconds(30)};
 };
 
 // Thread safe. Not copyable or movable (reactors point into it).
@@ -72,6 +76,9 @@ class PathMergerService final : public v1::PathMerger::CallbackService {
 
   // Drops sessions idle past their time-to-live and their H-Graphs; called periodically.
   void ExpireIdleSessions();
+  // Aborts UploadBlob streams idle past options().upload_idle_timeout (ABORTED), releasing
+  // their reserved bytes and admission slots; called periodically.
+  void ExpireIdleUploads();
   // Waits for every admitted job (after the gRPC server has shut down).
   void WaitIdle() { pool_.WaitIdle(); }
 
@@ -90,15 +97,22 @@ class PathMergerService final : public v1::PathMerger::CallbackService {
   class MergeCall;
   class PlanCall;
 
+  // Counts the call as started (grpc_server_started_total) and returns its start time.
+  std::chrono::steady_clock::time_point RecordStart(const std::string& method);
   void DropHGraphs(const std::vector<std::string>& names);
+  void AddUpload(UploadCall* call);
+  void RemoveUpload(UploadCall* call);
   void RecordMerge(const std::string& method, const v1::MergeResult& result);
 
   ServerOptions options_;
   Metrics& metrics_;
+  ServiceMetrics families_;  // declared in metrics_; before scenes_, which counts into them
   ResourceCache cache_;
   SceneStore scenes_;
   SessionRegistry sessions_;
   WorkerPool pool_;
+  std::mutex uploads_mutex_;
+  std::set<UploadCall*> uploads_;  // unfinished UploadBlob streams
 };
 
 }  // namespace hgraph::server

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "core/common/client_text.h"
 #include "core/common/error.h"
 #include "core/common/limits.h"
 
@@ -29,16 +30,16 @@ HGraph::HGraph(const Space& space, std::vector<InputPath> paths, double endpoint
     const double ds = space.Distance(path.waypoints.front(), start);
     if (ds > endpoint_tolerance) {
       throw InputError(field + ".waypoints[0]",
-                       "path '" + path.name + "' starts " + std::to_string(ds) +
-                           " away from the start of path '" + paths_[0].name + "' (tolerance " +
-                           std::to_string(endpoint_tolerance) + ")");
+                       "path '" + ClientText(path.name) + "' starts " + std::to_string(ds) +
+                           " away from the start of path '" + ClientText(paths_[0].name) +
+                           "' (tolerance " + std::to_string(endpoint_tolerance) + ")");
     }
     const double dg = space.Distance(path.waypoints.back(), goal);
     if (dg > endpoint_tolerance) {
       throw InputError(field + ".waypoints[" + std::to_string(path.waypoints.size() - 1) + "]",
-                       "path '" + path.name + "' ends " + std::to_string(dg) +
-                           " away from the goal of path '" + paths_[0].name + "' (tolerance " +
-                           std::to_string(endpoint_tolerance) + ")");
+                       "path '" + ClientText(path.name) + "' ends " + std::to_string(dg) +
+                           " away from the goal of path '" + ClientText(paths_[0].name) +
+                           "' (tolerance " + std::to_string(endpoint_tolerance) + ")");
     }
   }
 
@@ -53,7 +54,7 @@ void HGraph::PrepareWaypoints(const Space& space, int index, const std::string& 
                               InputPath& path) {
   if (path.name.empty()) path.name = "path" + std::to_string(index);
   if (path.waypoints.size() < 2) {
-    throw InputError(field + ".waypoints", "path '" + path.name + "' has " +
+    throw InputError(field + ".waypoints", "path '" + ClientText(path.name) + "' has " +
                                                std::to_string(path.waypoints.size()) +
                                                " waypoint(s); at least 2 are required");
   }
@@ -76,7 +77,7 @@ InputPath HGraph::CheckedPath(const Space& space, InputPath path, double endpoin
   PrepareWaypoints(space, num_paths(), field, path);
   const double ds = space.Distance(path.waypoints.front(), node(start_id()).q);
   if (ds > endpoint_tolerance) {
-    throw InputError(field + ".waypoints[0]", "path '" + path.name + "' starts " +
+    throw InputError(field + ".waypoints[0]", "path '" + ClientText(path.name) + "' starts " +
                                                   std::to_string(ds) +
                                                   " away from the H-Graph's start (tolerance " +
                                                   std::to_string(endpoint_tolerance) + ")");
@@ -84,7 +85,7 @@ InputPath HGraph::CheckedPath(const Space& space, InputPath path, double endpoin
   const double dg = space.Distance(path.waypoints.back(), node(goal_id()).q);
   if (dg > endpoint_tolerance) {
     throw InputError(field + ".waypoints[" + std::to_string(path.waypoints.size() - 1) + "]",
-                     "path '" + path.name + "' ends " + std::to_string(dg) +
+                     "path '" + ClientText(path.name) + "' ends " + std::to_string(dg) +
                          " away from the H-Graph's goal (tolerance " +
                          std::to_string(endpoint_tolerance) + ")");
   }

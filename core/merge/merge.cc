@@ -12,6 +12,7 @@
 #include <limits>
 #include <mutex>
 
+#include "core/common/client_text.h"
 #include "core/common/error.h"
 #include "core/common/parallel.h"
 #include "core/merge/path_check.h"
@@ -129,7 +130,7 @@ Evaluation ParseEvaluation(const std::string& name, const std::string& field) {
   for (Evaluation e : {Evaluation::kLazy, Evaluation::kEager}) {
     if (name == EvaluationName(e)) return e;
   }
-  throw InputError(field, "unknown evaluation '" + name + "' (expected lazy or eager)");
+  throw InputError(field, "unknown evaluation '" + ClientText(name) + "' (expected lazy or eager)");
 }
 
 HybridizationSession::HybridizationSession(const MotionChecker& checker,

@@ -549,3 +549,255 @@ def test_cli_remote_deadline(server, tmp_path):
                    "--timeout", "0.5", "-q")
     # The server did not answer in time: exit 3 (server failed), not 2 (bad input).
     assert late.returncode == 3 and "DEADLINE_EXCEEDED" in late.stderr, late.stderr
+
+
+def test_started_total_counts_a_call_in_flight():
+    """grpc_server_started_total goes up when a call starts, handled_total when it ends: while a
+    merge runs, started exceeds handled by one for MergePaths (on a server of its own, so that no
+    other test's call is in flight)."""
+    server = Server()
+    try:
+        with server.client() as client:
+            client.create_session(client.upload_scene(DATA / "scene.json"))
+            started_total_in_flight(server, client)
+    finally:
+        assert server.stop() == 0, "".join(server.log)
+
+
+def started_total_in_flight(server, client):
+    def counts():
+        return (server.metric("grpc_server_started_total", grpc_method="MergePaths"),
+                server.metric("grpc_server_handled_total", grpc_method="MergePaths"))
+
+    request = service_pb2.MergePathsRequest(
+        session=client.session, paths=hgraph_client.make_paths(densified(40)),
+        options=merge_pb2.MergeOptions(variant=merge_pb2.VARIANT_ALL_PAIRS,
+                                       evaluation=merge_pb2.EVALUATION_EAGER),
+        progress_interval_ms=10)
+    call = client.merge_stream(request, timeout=60)
+    during = None
+    for event in call:
+        if event.HasField("progress"):
+            during = counts()
+            call.cancel()
+            break
+    with pytest.raises(grpc.RpcError):
+        for _ in call:
+            pass
+    assert during is not None
+    started, handled = during
+    assert started == handled + 1, during
+    # Once the cancelled call is finished, the two agree again.
+    for _ in range(400):
+        started, handled = counts()
+        if started == handled:
+            break
+        time.sleep(0.05)
+    assert started == handled
+
+
+def run_server_expecting_refusal(*flags):
+    """Runs hgraph-server with `flags` and returns (exit code, stderr) of a refused start."""
+    proc = subprocess.run([SERVER, "--listen", "127.0.0.1:0", "--metrics-listen", "", *flags],
+                          capture_output=True, text=True, timeout=30)
+    assert "ready" not in proc.stdout, proc.stdout
+    return proc.returncode, proc.stderr
+
+
+def test_max_message_bytes_out_of_int_range_is_refused():
+    # gRPC takes an int: 3 GB would wrap to a negative size if narrowed unchecked.
+    code, err = run_server_expecting_refusal("--max-message-bytes", "3000000000")
+    assert code != 0
+    assert "--max-message-bytes" in err and "2147483647" in err, err
+
+
+def test_mistyped_log_level_is_refused_naming_the_allowed_values():
+    code, err = run_server_expecting_refusal("--log-level", "verbose")
+    assert code != 0
+    assert "--log-level" in err and "verbose" in err, err
+    for level in ("trace", "debug", "info", "warn", "error"):
+        assert level in err, err
+
+
+def test_metrics_listener_error_names_the_flag():
+    import socket
+    taken = socket.socket()
+    taken.bind(("127.0.0.1", 0))
+    taken.listen(1)
+    try:
+        port = taken.getsockname()[1]
+        proc = subprocess.run([SERVER, "--listen", "127.0.0.1:0", "--metrics-listen",
+                               f"127.0.0.1:{port}"], capture_output=True, text=True, timeout=30)
+    finally:
+        taken.close()
+    assert proc.returncode != 0
+    assert "--metrics-listen" in proc.stderr, proc.stderr
+    assert "--metrics-address" not in proc.stderr, proc.stderr
+
+
+def test_merge_whose_session_is_deleted_meanwhile_still_answers(server):
+    """Deleting the session while its merge runs: the merge still answers with its result; the
+    H-Graph is not stored (no name to re-query), and the session stays deleted."""
+    with server.client() as c:
+        c.create_session(c.upload_scene(DATA / "scene.json"))
+        session = c.session
+        deleted = []
+
+        def on_progress(_):
+            if not deleted:
+                with server.client() as other:
+                    other.delete_session(session)
+                deleted.append(True)
+
+        merged = c.merge(densified(40), variant="all-pairs", evaluation="eager",
+                         optimize_ms=0, on_progress=on_progress, progress_interval_ms=10,
+                         timeout=120)
+        assert deleted
+        assert merged.result.quality.length > 0
+        assert len(merged.result.path.waypoints) >= 2
+        assert merged.hgraph == ""
+        with pytest.raises(hgraph_client.HgraphError) as e:
+            server.client().get_session(session)
+        assert e.value.code == grpc.StatusCode.NOT_FOUND
+
+
+class StalledUpload:
+    """An UploadBlob stream that sends its first chunk of `size` declared bytes, then nothing
+    until release() (which sends the rest) or forever."""
+
+    def __init__(self, client, size, seed=b"x"):
+        import hashlib
+        self.data = (seed * size)[:size]
+        digest = scene_pb2.Digest(sha256=hashlib.sha256(self.data).hexdigest(), size_bytes=size)
+        self.sent_first = threading.Event()
+        self.go_on = threading.Event()
+
+        def chunks():
+            yield service_pb2.UploadBlobRequest(digest=digest, data=self.data[:1024])
+            self.sent_first.set()
+            self.go_on.wait()
+            yield service_pb2.UploadBlobRequest(data=self.data[1024:])
+
+        self.future = client.stub.UploadBlob.future(chunks(), timeout=120)
+        # The generator goes past its first yield when gRPC asks for the second chunk; a
+        # stream the server refused at its first chunk never asks.
+        for _ in range(600):
+            if self.sent_first.wait(0.05) or self.future.done():
+                break
+        else:
+            raise AssertionError("the first chunk was never sent")
+
+    def release(self):
+        self.go_on.set()
+        return self.future.result(timeout=60)
+
+    def error(self):
+        """The status the server ended the stream with."""
+        try:
+            self.future.result(timeout=60)
+        except grpc.RpcError as e:
+            return e
+        raise AssertionError("the stalled upload succeeded")
+
+
+def wait_for_metric(server, name, value, **labels):
+    for _ in range(400):
+        if server.metric(name, **labels) == value:
+            return
+        time.sleep(0.05)
+    raise AssertionError(f"{name}{labels} never became {value}: {server.metric(name, **labels)}")
+
+
+def test_unfinished_uploads_count_against_the_cache_budget():
+    server = Server("--cache-bytes", str(1 << 20))
+    try:
+        with server.client() as c:
+            stalled = StalledUpload(c, 700 << 10)
+            wait_for_metric(server, "hgraph_cache_bytes", 700 << 10, kind="upload")
+            # Two unfinished 700 kB uploads would hold 1.4 MB against a 1 MiB budget.
+            second = StalledUpload(c, 700 << 10, seed=b"y")
+            e = second.error()
+            assert e.code() == grpc.StatusCode.RESOURCE_EXHAUSTED, e
+            assert "digest.size_bytes" in e.details() and "--cache-bytes" in e.details()
+            second.go_on.set()
+            # The first one completes, and its bytes now count as a blob, not a reservation.
+            assert stalled.release().stored
+            wait_for_metric(server, "hgraph_cache_bytes", 0, kind="upload")
+            assert server.metric("hgraph_cache_bytes", kind="blob") == 700 << 10
+    finally:
+        assert server.stop() == 0, "".join(server.log)
+
+
+def test_an_unfinished_upload_takes_an_admission_slot():
+    server = Server("--max-pending", "1")
+    try:
+        with server.client() as c:
+            stalled = StalledUpload(c, 64 << 10)
+            with pytest.raises(hgraph_client.HgraphError) as e:
+                c.create_session(c.upload_scene(DATA / "scene.json"))
+            assert e.value.code == grpc.StatusCode.RESOURCE_EXHAUSTED
+            assert "--max-pending" in str(e.value)
+            assert stalled.release().stored
+            # The slot is free again.
+            c.create_session(c.upload_scene(DATA / "scene.json"))
+            assert c.merge(input_paths(), timeout=30).result.quality.length > 0
+    finally:
+        assert server.stop() == 0, "".join(server.log)
+
+
+def test_an_idle_upload_is_aborted_and_its_bytes_released():
+    server = Server("--cache-bytes", str(1 << 20), "--upload-idle-timeout-s", "1",
+                    "--max-pending", "1")
+    try:
+        with server.client() as c:
+            stalled = StalledUpload(c, 900 << 10)
+            e = stalled.error()
+            stalled.go_on.set()
+            assert e.code() == grpc.StatusCode.ABORTED, e
+            assert "--upload-idle-timeout-s" in e.details(), e.details()
+            wait_for_metric(server, "hgraph_cache_bytes", 0, kind="upload")
+            # Its 900 kB and its admission slot are free: another upload of that size goes in.
+            blob = (b"z" * (900 << 10))
+            assert c.upload_blob(blob, timeout=30).size_bytes == len(blob)
+    finally:
+        assert server.stop() == 0, "".join(server.log)
+
+
+def test_a_name_with_a_newline_cannot_forge_a_log_line(server):
+    forged = "\n2026-01-01 info FORGED"
+    name = "sessions/" + (forged + "x" * 32)[:32]
+    with server.client() as c:
+        # The raw stub: the client library would also put the name in call metadata, which
+        # refuses a newline on the client side.
+        with pytest.raises(grpc.RpcError) as e:
+            c.stub.GetSession(service_pb2.GetSessionRequest(name=name), timeout=10)
+    assert e.value.code() == grpc.StatusCode.INVALID_ARGUMENT
+    assert "\n" not in e.value.details()
+    assert "\\n2026-01-01 info FORGED" in e.value.details(), e.value.details()
+    for _ in range(100):
+        if any("\\n2026-01-01 info FORGED" in line for line in server.log):
+            break
+        time.sleep(0.05)
+    else:
+        raise AssertionError("the call was not logged:\n" + "".join(server.log[-5:]))
+    assert not any(line.startswith("2026-01-01 info FORGED") for line in server.log)
+
+
+def test_a_100_kb_name_gets_the_real_error(client):
+    with pytest.raises(hgraph_client.HgraphError) as e:
+        client.plan(count=1, planner="p" * 100000, time_per_path_s=0.1)
+    assert e.value.code == grpc.StatusCode.INVALID_ARGUMENT, e.value
+    message = str(e.value)
+    assert "planner" in message and "unknown planner" in message and "bytes, cut" in message
+    assert len(message) < 4000
+
+
+def test_a_scene_digest_with_a_wrong_size_is_refused_naming_the_field(server):
+    with server.client() as c:
+        digest = c.upload_scene(DATA / "scene.json")
+        wrong = scene_pb2.Digest(sha256=digest.sha256, size_bytes=digest.size_bytes + 1)
+        with pytest.raises(grpc.RpcError) as e:
+            c.stub.CreateSession(service_pb2.CreateSessionRequest(scene=wrong), timeout=30)
+        assert e.value.code() == grpc.StatusCode.INVALID_ARGUMENT
+        assert "scene.size_bytes" in e.value.details(), e.value.details()
+        assert c.create_session(digest).name.startswith("sessions/")
