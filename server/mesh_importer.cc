@@ -97,7 +97,24 @@ std::string DefaultMeshImportHelper() {
   return (self.parent_path() / "hgraph-mesh-import").string();
 }
 
-MeshImporter::MeshImporter(MeshImportLimits limits) : limits_(std::move(limits)) {}
+// Builds with AddressSanitizer or ThreadSanitizer (scripts/sanitize.sh): their runtimes reserve
+// terabytes of address space for shadow memory, so a child under RLIMIT_AS cannot even start.
+// There the address-space limit is off; the CPU, time, descriptor and output limits still hold.
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+constexpr bool kShadowMemory = true;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
+constexpr bool kShadowMemory = true;
+#else
+constexpr bool kShadowMemory = false;
+#endif
+#else
+constexpr bool kShadowMemory = false;
+#endif
+
+MeshImporter::MeshImporter(MeshImportLimits limits) : limits_(std::move(limits)) {
+  if (kShadowMemory) limits_.memory_mb = 0;
+}
 
 void MeshImporter::CheckHelper() const {
   std::error_code ec;
