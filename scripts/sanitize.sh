@@ -20,15 +20,16 @@ case "$mode" in
     # Everything but what needs the network or only checks files (lint, layering, deploy, docs,
     # contract) and the pip install of the Python package.
     select=(-L "unit|integration|fuzz" -LE "python")
-    export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:halt_on_error=1}
+    export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:halt_on_error=1:log_path=$build/sanitizer-reports/asan}
     ;;
   tsan)
     build=${2:-$root/build-tsan}
     config=(-DHGRAPH_SANITIZE=thread)
-    # The unit tests (the engine's parallel loops, per-thread collision contexts) and the
-    # service tests (real server: gRPC threads, worker pool, concurrent merges, cancellation).
-    select=(-L "unit|service")
-    export TSAN_OPTIONS=${TSAN_OPTIONS:-halt_on_error=0:second_deadlock_stack=1}
+    # The unit tests (the engine's parallel loops, per-thread collision contexts), the service
+    # tests and the load test's smoke run (real server: gRPC threads, worker pool, concurrent
+    # merges, cancellation, disconnects, restart).
+    select=(-L "unit|service|load")
+    export TSAN_OPTIONS=${TSAN_OPTIONS:-halt_on_error=0:second_deadlock_stack=1:log_path=$build/sanitizer-reports/tsan}
     ;;
   *)
     echo "sanitize.sh: unknown mode '$mode' (asan or tsan)" >&2
@@ -53,7 +54,16 @@ cmake -S "$root" -B "$build" "${generator[@]}" -DCMAKE_BUILD_TYPE=RelWithDebInfo
 cmake --build "$build" -j"$jobs"
 built=$(date +%s)
 echo "== sanitize.sh $mode: built in $((built - started)) s"
+# Reports go to files (log_path), one per process that had any: a test that captures a
+# subprocess's stderr still fails on its exit status, and the report is kept here.
+rm -rf "$build/sanitizer-reports"
+mkdir -p "$build/sanitizer-reports"
 status=0
 ctest --test-dir "$build" --output-on-failure -j"$jobs" "${select[@]}" || status=$?
-echo "== sanitize.sh $mode: tests in $(($(date +%s) - built)) s, exit $status"
+reports=$(find "$build/sanitizer-reports" -type f | wc -l)
+echo "== sanitize.sh $mode: tests in $(($(date +%s) - built)) s, exit $status, $reports processes with sanitizer reports"
+if [ "$reports" -gt 0 ]; then
+  find "$build/sanitizer-reports" -type f | head -5 | xargs head -60
+  status=1
+fi
 exit $status

@@ -29,7 +29,6 @@ import collections
 import hashlib
 import json
 import math
-import os
 import pathlib
 import random
 import re
@@ -44,8 +43,7 @@ import time
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 
-# Codes a scenario explains. Anything else (INTERNAL, UNKNOWN, INVALID_ARGUMENT, ...) on these
-# valid requests is a server bug.
+# grpc.health.v1.HealthCheckResponse{status: SERVING}.
 HEALTH_SERVING = b"\x08\x01"
 
 
@@ -60,7 +58,8 @@ def parse_args(argv):
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--no-restart", action="store_true", help="skip the server restart")
     p.add_argument("--call-timeout", type=float, default=120,
-                   help="deadline of every ordinary call, s (default 120; sanitizer builds are slow)")
+                   help="deadline of every ordinary call, s (default 120: sanitizer builds are "
+                   "slow)")
     p.add_argument("--json", help="also write the figures here")
     p.add_argument("--child-merge", nargs=2, metavar=("TARGET", "SESSION"), help=argparse.SUPPRESS)
     return p.parse_args(argv)
@@ -482,8 +481,10 @@ def client_worker(index, stats, target, scene_path, stop, timeout):
                 continue
             digest = timed(stats, "client.upload_scene",
                            lambda: client.upload_scene(scene_path, timeout=timeout))
-            if digest is None or timed(stats, "client.create_session",
-                                       lambda: client.create_session(digest, timeout=timeout)) is None:
+            created = digest is not None and timed(
+                stats, "client.create_session",
+                lambda: client.create_session(digest, timeout=timeout)) is not None
+            if not created:
                 client.close()
                 client = None
                 time.sleep(0.2)
@@ -493,8 +494,8 @@ def client_worker(index, stats, target, scene_path, stop, timeout):
         recoveries = client.recoveries
         merged_at = time.monotonic()
         outcome = timed(stats, "client.merge", lambda: client.merge(
-            job.paths, variant=rng.choice(["edit-distance", "all-pairs"]), optimize_ms=job.optimize_ms,
-            timeout=timeout))
+            job.paths, variant=rng.choice(["edit-distance", "all-pairs"]),
+            optimize_ms=job.optimize_ms, timeout=timeout))
         stats.add("recoveries", client.recoveries - recoveries)
         if outcome is None:
             continue
@@ -502,7 +503,8 @@ def client_worker(index, stats, target, scene_path, stop, timeout):
         if why:
             stats.note("mixed", "client.merge", why)
         if not outcome.hgraph.startswith(client.session + "/hgraphs/"):
-            stats.note("mixed", "client.merge", f"H-Graph {outcome.hgraph!r} not in {client.session}")
+            stats.note("mixed", "client.merge",
+                       f"H-Graph {outcome.hgraph!r} not in {client.session}")
         result = timed(stats, "client.requery", lambda: client.requery(
             outcome.hgraph, "inverse-clearance", k=2, timeout=timeout),
             expected=lambda: (C.NOT_FOUND,) if stats.lost_by_restart(merged_at) else ())
@@ -516,7 +518,8 @@ def client_worker(index, stats, target, scene_path, stop, timeout):
                 lengths = [p.quality.length for p in checked.paths]
                 if len(lengths) != len(job.lengths) or any(
                         abs(a - b) > 1e-6 * max(1.0, b) for a, b in zip(lengths, job.lengths)):
-                    stats.note("mixed", "client.check", f"lengths {lengths}, the request's {job.lengths}")
+                    stats.note("mixed", "client.check",
+                               f"lengths {lengths}, the request's {job.lengths}")
                 if not checked.valid:
                     stats.note("mixed", "client.check", "a valid street route reported invalid")
     if client is not None:
@@ -550,9 +553,9 @@ def disconnect_worker(stats, target, scene_path, stop, timeout):
             continue
         if count % 4 == 0:
             # A client process killed mid-stream: its TCP connection just goes away.
-            child = subprocess.Popen([sys.executable, __file__, "--server-binary", args.server_binary,
-                                      "--python-path", STUBS, "--child-merge", target,
-                                      session.name],
+            child = subprocess.Popen([sys.executable, __file__, "--server-binary",
+                                      args.server_binary, "--python-path", STUBS,
+                                      "--child-merge", target, session.name],
                                      stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
             line = child.stdout.readline()
             child.kill()
@@ -660,12 +663,12 @@ def main():
     servers = [server]
     stop = threading.Event()
     timeout = args.call_timeout
-    workers = [threading.Thread(target=raw_worker, args=(i, stats, target, scene_path, stop, timeout))
-               for i in range(args.raw)]
-    workers += [threading.Thread(target=client_worker, args=(i, stats, target, scene_path, stop, timeout))
+    common = (stats, target, scene_path, stop, timeout)
+    workers = [threading.Thread(target=raw_worker, args=(i, *common)) for i in range(args.raw)]
+    workers += [threading.Thread(target=client_worker, args=(i, *common))
                 for i in range(args.clients)]
-    workers += [threading.Thread(target=disconnect_worker, args=(stats, target, scene_path, stop, timeout)),
-                threading.Thread(target=deadline_storm, args=(stats, target, scene_path, stop, timeout)),
+    workers += [threading.Thread(target=disconnect_worker, args=common),
+                threading.Thread(target=deadline_storm, args=common),
                 threading.Thread(target=health_prober, args=(stats, target, stop))]
     began = time.monotonic()
     for w in workers:
@@ -713,13 +716,16 @@ def main():
     total = sum(stats.requests.values())
     ok = sum(stats.ok.values())
     print(f"hgraph load test: {elapsed:.0f} s, {args.raw} raw + {args.clients} client workers, "
-          f"disconnects, deadline storms, {len(servers) - 1} restart(s); server --threads {args.threads}")
+          f"disconnects, deadline storms, {len(servers) - 1} restart(s); "
+          f"server --threads {args.threads}")
     print(f"requests: {total} (ok {ok}, cancelled by the client {stats.cancelled_by_client}, "
           f"errors {sum(stats.errors.values())}); storm calls {stats.storm_calls}, "
           f"dropped streams {stats.disconnects}, killed client processes {stats.killed_clients}")
-    print("errors by code: " + (", ".join(f"{k} {v}" for k, v in sorted(stats.errors.items())) or "none"))
-    print(f"after the restart: {stats.reuploads} raw sessions re-opened ({stats.blobs_reuploaded} blobs "
-          f"uploaded again: the new server lacked them), {stats.recoveries} hgraph_client recoveries")
+    codes = ", ".join(f"{k} {v}" for k, v in sorted(stats.errors.items()))
+    print(f"errors by code: {codes or 'none'}")
+    print(f"after the restart: {stats.reuploads} raw sessions re-opened, "
+          f"{stats.blobs_reuploaded} blobs uploaded again (the new server lacked them), "
+          f"{stats.recoveries} hgraph_client recoveries")
     print(f"lost: {len(stats.lost)}   mixed: {len(stats.mixed)}   unexplained errors: "
           f"{len(stats.unexpected)}   health failures: {len(stats.unhealthy)}")
     print(f"{'method':<22}{'ok':>7}{'p50 ms':>10}{'p99 ms':>10}")
