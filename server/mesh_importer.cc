@@ -97,7 +97,37 @@ std::string DefaultMeshImportHelper() {
   return (self.parent_path() / "hgraph-mesh-import").string();
 }
 
-MeshImporter::MeshImporter(MeshImportLimits limits) : limits_(std::move(limits)) {}
+// Builds with AddressSanitizer or ThreadSanitizer (scripts/sanitize.sh): their runtimes reserve
+// terabytes of address space for shadow memory, so a child under RLIMIT_AS cannot even start.
+// There the address-space limit is off; the CPU, time, descriptor and output limits still hold.
+// ThreadSanitizer also writes a temporary file while it starts (/tmp/tsan.rodata.<pid>), so
+// there the child's RLIMIT_FSIZE comes from the child itself, set before it reads a byte.
+#if defined(__SANITIZE_THREAD__)
+constexpr bool kThreadSanitizer = true;
+#elif defined(__has_feature)
+#if __has_feature(thread_sanitizer)
+constexpr bool kThreadSanitizer = true;
+#else
+constexpr bool kThreadSanitizer = false;
+#endif
+#else
+constexpr bool kThreadSanitizer = false;
+#endif
+#if defined(__SANITIZE_ADDRESS__)
+constexpr bool kShadowMemory = true;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+constexpr bool kShadowMemory = true;
+#else
+constexpr bool kShadowMemory = kThreadSanitizer;
+#endif
+#else
+constexpr bool kShadowMemory = kThreadSanitizer;
+#endif
+
+MeshImporter::MeshImporter(MeshImportLimits limits) : limits_(std::move(limits)) {
+  if (kShadowMemory) limits_.memory_mb = 0;
+}
 
 void MeshImporter::CheckHelper() const {
   std::error_code ec;
@@ -177,7 +207,7 @@ std::shared_ptr<const Mesh> MeshImporter::Import(const std::string& bytes,
   if (limits_.memory_mb > 0) SetLimit(pid, RLIMIT_AS, static_cast<rlim_t>(limits_.memory_mb) << 20);
   SetLimit(pid, RLIMIT_CPU, static_cast<rlim_t>(limits_.cpu_s));
   SetLimit(pid, RLIMIT_CORE, 0);
-  SetLimit(pid, RLIMIT_FSIZE, 0);
+  if (!kThreadSanitizer) SetLimit(pid, RLIMIT_FSIZE, 0);
   in_child.Reset();
   out_child.Reset();
   ::fcntl(in_parent.get(), F_SETFL, O_NONBLOCK);

@@ -1,15 +1,15 @@
 // The server's worker pool: every CPU-bound step of a call (hashing uploads, loading scenes,
 // building and searching H-Graphs) runs here, never on a gRPC thread. A oneTBB task_arena of
 // N threads runs the jobs; the engine's own parallel loops nest inside them, and a process-wide
-// tbb::global_control keeps the total at N threads however many jobs run at once.
+// tbb::global_control keeps the total at N threads however many jobs run at once. In builds with
+// the std parallel backend (core/common/parallel.h; ThreadSanitizer builds) N std::threads run
+// the jobs instead, and the engine's loops take helper threads of their own.
 #pragma once
-
-#include <tbb/global_control.h>
-#include <tbb/task_arena.h>
 
 #include <atomic>
 #include <condition_variable>
 #include <functional>
+#include <memory>
 #include <mutex>
 
 namespace hgraph::server {
@@ -55,16 +55,15 @@ class WorkerPool {
   int admitted() const { return admitted_.load(); }
 
  private:
+  class Runner;  // the threads that run the jobs (worker_pool.cc: oneTBB or std::thread)
+
   const int threads_;
   const int max_admitted_;
-  // Enqueued jobs are run by TBB worker threads only (no thread joins the arena), so the
-  // global limit is threads + 1: TBB counts one slot for an external thread.
-  tbb::global_control parallelism_;
-  tbb::task_arena arena_;
   std::atomic<int> admitted_{0};  // jobs holding an admission slot
   std::atomic<int> running_{0};   // jobs queued or running, whether or not they hold a slot
   std::mutex mutex_;
   std::condition_variable idle_;
+  std::unique_ptr<Runner> runner_;  // last: its threads stop before the members above go
 };
 
 }  // namespace hgraph::server

@@ -1,10 +1,5 @@
 #include "core/merge/merge.h"
 
-#include <tbb/blocked_range.h>
-#include <tbb/info.h>
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
-
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -36,7 +31,7 @@ constexpr double kOptimizeMinGain = 1e-3;
 
 int ResolveThreads(int threads) {
   if (threads < 0) throw InputError("options.threads", "must be >= 0 (0 = all cores)");
-  return threads == 0 ? tbb::info::default_concurrency() : threads;
+  return threads == 0 ? DefaultConcurrency() : threads;
 }
 
 // Reports progress from worker threads at most about every percent of the work.
@@ -213,29 +208,23 @@ void HybridizationSession::CheckEdges(const std::vector<int>& edge_ids, EdgeNeed
   if (total == 0) return;
   const ProgressReporter reporter(progress, phase, total, *checker_, Clock::now());
   std::atomic<int64_t> done{0};
-  RunWithThreads(ResolveThreads(options_.threads), [&] {
-    tbb::parallel_for(
-        tbb::blocked_range<size_t>(0, edge_ids.size(), 1),
-        [&](const tbb::blocked_range<size_t>& range) {
-          for (size_t k = range.begin(); k != range.end(); ++k) {
-            if (cancel.stopped()) return;
-            HEdge& edge = graph_.mutable_edge(edge_ids[k]);
-            const EdgeReport previous = std::move(edge.report);
-            edge.report = checker_->CheckEdge(EdgeCheckRequest{
-                .from = &graph_.node(edge.u).q,
-                .to = &graph_.node(edge.v).q,
-                .mode = need == EdgeNeed::kValidity           ? EdgeCheckMode::kSampled
-                        : need == EdgeNeed::kCertificate      ? EdgeCheckMode::kCertified
-                        : previous.state == EdgeState::kValid ? EdgeCheckMode::kClearanceOfValid
-                                                              : EdgeCheckMode::kClearance});
-            // A re-check for clearance keeps counting what the first check cost.
-            if (previous.state != EdgeState::kUnchecked) {
-              edge.report.collision_checks += previous.collision_checks;
-              edge.report.distance_queries += previous.distance_queries;
-            }
-            reporter.Done(done.fetch_add(1, std::memory_order_relaxed) + 1);
-          }
-        });
+  ParallelFor(ResolveThreads(options_.threads), edge_ids.size(), [&](size_t k) {
+    if (cancel.stopped()) return;
+    HEdge& edge = graph_.mutable_edge(edge_ids[k]);
+    const EdgeReport previous = std::move(edge.report);
+    edge.report = checker_->CheckEdge(EdgeCheckRequest{
+        .from = &graph_.node(edge.u).q,
+        .to = &graph_.node(edge.v).q,
+        .mode = need == EdgeNeed::kValidity           ? EdgeCheckMode::kSampled
+                : need == EdgeNeed::kCertificate      ? EdgeCheckMode::kCertified
+                : previous.state == EdgeState::kValid ? EdgeCheckMode::kClearanceOfValid
+                                                      : EdgeCheckMode::kClearance});
+    // A re-check for clearance keeps counting what the first check cost.
+    if (previous.state != EdgeState::kUnchecked) {
+      edge.report.collision_checks += previous.collision_checks;
+      edge.report.distance_queries += previous.distance_queries;
+    }
+    reporter.Done(done.fetch_add(1, std::memory_order_relaxed) + 1);
   });
   cancel.ThrowIfStopped();
   *checked += total;
@@ -246,15 +235,10 @@ int64_t HybridizationSession::ComputeNodeClearances(const CancelToken& cancel) {
   for (int n = 0; n < graph_.num_nodes(); ++n) {
     if (std::isnan(node_clearance_[n])) missing.push_back(n);
   }
-  RunWithThreads(ResolveThreads(options_.threads), [&] {
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, missing.size(), 1),
-                      [&](const tbb::blocked_range<size_t>& range) {
-                        for (size_t k = range.begin(); k != range.end(); ++k) {
-                          if (cancel.stopped()) return;
-                          const int n = missing[k];
-                          node_clearance_[n] = checker_->Clearance(graph_.node(n).q);
-                        }
-                      });
+  ParallelFor(ResolveThreads(options_.threads), missing.size(), [&](size_t k) {
+    if (cancel.stopped()) return;
+    const int n = missing[k];
+    node_clearance_[n] = checker_->Clearance(graph_.node(n).q);
   });
   cancel.ThrowIfStopped();
   return static_cast<int64_t>(missing.size());

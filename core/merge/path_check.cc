@@ -1,10 +1,5 @@
 #include "core/merge/path_check.h"
 
-#include <tbb/blocked_range.h>
-#include <tbb/info.h>
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
-
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -132,30 +127,25 @@ PathCheckResult CheckPaths(const MotionChecker& checker, const PathCheckRequest&
   const int64_t total = static_cast<int64_t>(jobs.size());
   const int64_t step = std::max<int64_t>(1, total / 100);
   std::atomic<int64_t> done{0}, checks{0}, queries{0};
-  RunWithThreads(request.threads == 0 ? tbb::info::default_concurrency() : request.threads, [&] {
-    tbb::parallel_for(
-        tbb::blocked_range<size_t>(0, jobs.size(), 1),
-        [&](const tbb::blocked_range<size_t>& range) {
-          for (size_t i = range.begin(); i != range.end(); ++i) {
-            if (request.cancel.stopped()) return;
-            const InputPath& path = paths[jobs[i].path];
-            reports[i] = checker.CheckEdge(EdgeCheckRequest{
-                .from = &path.waypoints[jobs[i].from],
-                .to = &path.waypoints[jobs[i].to],
-                .mode = need_clearance ? EdgeCheckMode::kClearance : EdgeCheckMode::kSampled});
-            const int64_t c = checks += reports[i].collision_checks;
-            const int64_t q = queries += reports[i].distance_queries;
-            const int64_t d = ++done;
-            if (request.progress && (d % step == 0 || d == total)) {
-              request.progress(Progress{.phase = "check",
-                                        .done = d,
-                                        .total = total,
-                                        .collision_checks = c,
-                                        .distance_queries = q,
-                                        .elapsed_ms = MsSince(started)});
-            }
-          }
-        });
+  const int threads = request.threads == 0 ? DefaultConcurrency() : request.threads;
+  ParallelFor(threads, jobs.size(), [&](size_t i) {
+    if (request.cancel.stopped()) return;
+    const InputPath& path = paths[jobs[i].path];
+    reports[i] = checker.CheckEdge(EdgeCheckRequest{
+        .from = &path.waypoints[jobs[i].from],
+        .to = &path.waypoints[jobs[i].to],
+        .mode = need_clearance ? EdgeCheckMode::kClearance : EdgeCheckMode::kSampled});
+    const int64_t c = checks += reports[i].collision_checks;
+    const int64_t q = queries += reports[i].distance_queries;
+    const int64_t d = ++done;
+    if (request.progress && (d % step == 0 || d == total)) {
+      request.progress(Progress{.phase = "check",
+                                .done = d,
+                                .total = total,
+                                .collision_checks = c,
+                                .distance_queries = q,
+                                .elapsed_ms = MsSince(started)});
+    }
   });
   request.cancel.ThrowIfStopped();
 
