@@ -10,6 +10,7 @@
 #include <string>
 
 #include "hgraph/v1/service.grpc.pb.h"
+#include "server/auth.h"
 #include "server/mesh_importer.h"
 #include "server/metrics.h"
 #include "server/resource_cache.h"
@@ -31,6 +32,7 @@ struct ServerOptions {
   std::chrono::milliseconds session_ttl{std::chrono::hours(1)};
   int progress_interval_ms = 100;
   MeshImportLimits mesh_import;  // how client mesh bytes are parsed (out of process)
+  Authenticator auth;            // --auth-tokens: who a call comes from (open without it)
 };
 
 // Thread safe. Not copyable or movable (reactors point into it).
