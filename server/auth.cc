@@ -127,7 +127,8 @@ TokenTable TokenTable::Parse(std::string_view text, const std::string& source) {
     table.entries_.push_back(Entry{.sha256 = std::move(digest), .tenant = std::string(tenant)});
   }
   if (table.entries_.empty()) {
-    throw InputError(kFlag, source + " holds no \"TOKEN TENANT\" line; every call would be refused");
+    throw InputError(kFlag,
+                     source + " holds no \"TOKEN TENANT\" line; every call would be refused");
   }
   return table;
 }
@@ -176,7 +177,8 @@ grpc::Status Authenticator::Authenticate(const std::vector<std::string_view>& au
   if (authorization.size() != 1) return invalid;
   std::string_view value = authorization.front();
   constexpr std::string_view kScheme = "bearer";
-  if (value.size() <= kScheme.size() || !EqualsIgnoreCase(value.substr(0, kScheme.size()), kScheme) ||
+  if (value.size() <= kScheme.size() ||
+      !EqualsIgnoreCase(value.substr(0, kScheme.size()), kScheme) ||
       !IsBlank(value[kScheme.size()])) {
     return invalid;
   }

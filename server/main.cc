@@ -123,8 +123,7 @@ int main(int argc, char** argv) {
   app.add_option("--tls-cert", flags.tls.cert,
                  "PEM certificate chain of the server: the gRPC port speaks TLS (with --tls-key)")
       ->check(CLI::ExistingFile);
-  app.add_option("--tls-key", flags.tls.key,
-                 "PEM private key (unencrypted) of --tls-cert")
+  app.add_option("--tls-key", flags.tls.key, "PEM private key (unencrypted) of --tls-cert")
       ->check(CLI::ExistingFile);
   app.add_option("--tls-client-ca", flags.tls.client_ca,
                  "PEM CA certificate(s): mutual TLS, every client must present a certificate "
@@ -176,8 +175,7 @@ int main(int argc, char** argv) {
     const std::shared_ptr<grpc::ServerCredentials> credentials =
         hgraph::server::MakeServerCredentials(flags.tls);
     if (!flags.auth_tokens.empty()) {
-      const hgraph::server::TokenTable tokens =
-          hgraph::server::TokenTable::Load(flags.auth_tokens);
+      const hgraph::server::TokenTable tokens = hgraph::server::TokenTable::Load(flags.auth_tokens);
       // Counts only: the file's contents are secrets and never reach the log.
       spdlog::info("--auth-tokens: {} tokens for {} tenants", tokens.size(),
                    tokens.tenants().size());

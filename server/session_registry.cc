@@ -128,8 +128,7 @@ std::vector<v1::Session> SessionRegistry::List(const std::string& tenant) const 
   return out;
 }
 
-std::vector<std::string> SessionRegistry::Delete(const std::string& name,
-                                                 const std::string& field,
+std::vector<std::string> SessionRegistry::Delete(const std::string& name, const std::string& field,
                                                  const std::string& tenant) {
   ValidateName(name, field);
   std::lock_guard lock(mutex_);

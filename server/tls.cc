@@ -115,8 +115,7 @@ std::shared_ptr<grpc::ServerCredentials> MakeServerCredentials(const TlsFiles& f
   Bio key_bio = MemoryBio(key_pem);
   Key key(PEM_read_bio_PrivateKey(key_bio.get(), nullptr, NoPassphrase, nullptr));
   if (!key) {
-    throw InputError("--tls-key", files.key +
-                                      " holds no unencrypted PEM private key (OpenSSL: " +
+    throw InputError("--tls-key", files.key + " holds no unencrypted PEM private key (OpenSSL: " +
                                       OpensslReason() + ")");
   }
   if (X509_check_private_key(chain.front().get(), key.get()) != 1) {
@@ -131,8 +130,8 @@ std::shared_ptr<grpc::ServerCredentials> MakeServerCredentials(const TlsFiles& f
   options.pem_key_cert_pairs.push_back({.private_key = key_pem, .cert_chain = cert_pem});
   if (mode == TransportMode::kMutualTls) {
     options.pem_root_certs = ReadFile(files.client_ca, "--tls-client-ca");
-    for (const Cert& ca : ReadCertificates(options.pem_root_certs, files.client_ca,
-                                           "--tls-client-ca")) {
+    for (const Cert& ca :
+         ReadCertificates(options.pem_root_certs, files.client_ca, "--tls-client-ca")) {
       CheckDates(ca.get(), files.client_ca, "--tls-client-ca");
     }
   }

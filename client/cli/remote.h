@@ -78,8 +78,8 @@ class ServerFailure : public Error {
   using Error::Error;
 };
 
-// Adds --server, --session, --timeout and the connection flags to `local`'s app; with --server set, its run is
-// local.run_remote (which it requires), else the in-process run.
+// Adds --server, --session, --timeout and the connection flags to `local`'s app; with --server set,
+// its run is local.run_remote (which it requires), else the in-process run.
 Subcommand WithServer(Subcommand local);
 
 // Uploads the scene file (meshes relative to its folder) and opens remote.session or a new

@@ -31,11 +31,14 @@ std::string ParseError(const std::string& text) {
 TEST(TokenTable, ParsesPairsCommentsAndBlankLines) {
   const TokenTable table = TokenTable::Parse(
       "# tokens of the two teams\n"
-      "\n"
-      + std::string(kTokenA) + " team-a\n"
-      "   \t\n"
-      "\t" + kTokenB + "\tteam_b   # rotated 2026-11\r\n"
-      "another-token-of-team-a.v2= team-a\n",
+      "\n" +
+          std::string(kTokenA) +
+          " team-a\n"
+          "   \t\n"
+          "\t" +
+          kTokenB +
+          "\tteam_b   # rotated 2026-11\r\n"
+          "another-token-of-team-a.v2= team-a\n",
       "tokens.txt");
   EXPECT_EQ(table.size(), 3u);
   ASSERT_NE(table.Find(kTokenA), nullptr);
@@ -63,8 +66,9 @@ TEST(TokenTable, MalformedLinesNameTheLineAndNeverQuoteIt) {
   };
   const Case cases[] = {
       {"# header\n" + secret + "\n", "tokens.txt line 2: expected \"TOKEN TENANT\""},
-      {secret + " a b\n", "line 1: expected \"TOKEN TENANT\" (two fields separated by white "
-                          "space), found 3 fields"},
+      {secret + " a b\n",
+       "line 1: expected \"TOKEN TENANT\" (two fields separated by white "
+       "space), found 3 fields"},
       {"\n\nshort a\n", "line 3: the token has 5 characters; 16 to 4096 are required"},
       {secret + "!x a\n", "line 1: the token holds a character outside"},
       {"==" + secret + " a\n", "line 1: the token holds a character outside"},

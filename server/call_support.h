@@ -1,0 +1,53 @@
+// What every call of the PathMerger service shares: the mapping of engine errors to canonical
+// statuses, the call's deadline on its cancel token, the "busy" answer of a full worker pool,
+// and the H-Graphs kept for re-queries. Internal to server/ (the handlers include it).
+#pragma once
+
+#include <grpcpp/grpcpp.h>
+
+#include <chrono>
+#include <functional>
+#include <memory>
+#include <mutex>
+
+#include "core/common/error.h"
+#include "core/common/progress.h"
+#include "core/merge/merge.h"
+#include "core/motion/local_planner.h"
+#include "hgraph/v1/service.pb.h"
+#include "server/scene_store.h"
+#include "server/service.h"
+#include "server/worker_pool.h"
+
+namespace hgraph::server {
+
+using Clock = std::chrono::steady_clock;
+
+// The canonical name of a gRPC status code ("INVALID_ARGUMENT").
+const char* CodeName(grpc::StatusCode code);
+// The canonical code an engine error maps to.
+grpc::StatusCode ToGrpcCode(ErrorCode code);
+
+// Runs `body` and turns whatever it throws into a canonical status. A cancellation that comes
+// from the passed deadline (gRPC cancels the call at the deadline too) is DEADLINE_EXCEEDED.
+grpc::Status Invoke(const std::function<void()>& body, const CancelToken& token);
+
+// The call's deadline, if any, on the token (the engine polls it).
+void WireDeadline(grpc::CallbackServerContext* context, const CancelToken& token);
+
+// RESOURCE_EXHAUSTED: the worker pool's admission queue is full.
+grpc::Status Busy(const WorkerPool& pool);
+
+// Checks a batch against the server's limits (--max-paths, --max-waypoints) before any work.
+void CheckBatchLimits(const v1::PathSet& paths, const ServerOptions& options);
+
+// An H-Graph kept for re-queries, with the local planner its edges were checked with.
+// HybridizationSession is not thread safe, so queries on one H-Graph are serialised.
+struct PathMergerService::StoredHGraph {
+  std::mutex mutex;
+  LoadedScene scene;
+  std::unique_ptr<LocalPlanner> planner;
+  std::unique_ptr<HybridizationSession> session;
+};
+
+}  // namespace hgraph::server

@@ -1,0 +1,195 @@
+#include <spdlog/spdlog.h>
+
+#include <cmath>
+#include <mutex>
+#include <string>
+#include <utility>
+
+#include "core/adapter/merge_proto.h"
+#include "core/adapter/path_io.h"
+#include "core/adapter/scene_proto.h"
+#include "core/common/limits.h"
+#include "server/call_support.h"
+#include "server/service.h"
+
+namespace hgraph::server {
+
+// MergePaths: progress events at a bounded rate with at most one write in flight (a newer
+// report replaces an unsent one rather than queueing), then the result.
+class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::MergePathsResponse> {
+ public:
+  MergeCall(PathMergerService* service, grpc::CallbackServerContext* context,
+            const v1::MergePathsRequest* request)
+      : service_(service), request_(request) {
+    WireDeadline(context, token_);
+    if (grpc::Status auth = service->options().auth.Authenticate(*context, &tenant_); !auth.ok()) {
+      Complete(auth, false);
+      return;
+    }
+    if (request->progress_interval_ms() < 0 ||
+        request->progress_interval_ms() > limits::kMaxProgressIntervalMs) {
+      Complete(grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
+                            "progress_interval_ms: must be in [0, " +
+                                std::to_string(limits::kMaxProgressIntervalMs) +
+                                "] (0 = the "
+                                "server's default), got " +
+                                std::to_string(request->progress_interval_ms())),
+               false);
+      return;
+    }
+    const int interval = request->progress_interval_ms() > 0
+                             ? request->progress_interval_ms()
+                             : service->options().progress_interval_ms;
+    interval_ = std::chrono::milliseconds(interval);
+    const bool admitted =
+        service_->pool().TrySubmit([this](WorkerPool::Slot& slot) { Work(slot); });
+    if (!admitted) Complete(Busy(service_->pool()), false);
+  }
+
+  void OnWriteDone(bool ok) override {
+    bool send_final = false;
+    {
+      std::lock_guard lock(mutex_);
+      writing_ = false;
+      if (final_pending_ && !final_sent_) send_final = final_sent_ = true;
+    }
+    // A failed write means the client has gone: stop the work.
+    if (!ok) token_.Cancel();
+    if (send_final) SendFinal();
+  }
+
+  void OnCancel() override { token_.Cancel(); }
+  void OnDone() override { delete this; }
+
+ private:
+  void Work(WorkerPool::Slot& slot) {
+    v1::MergePathsResponse final_message;
+    const grpc::Status status = Invoke([&] { Merge(&final_message); }, token_);
+    if (status.ok()) final_ = std::move(final_message);
+    slot.Release();
+    Complete(status, status.ok());
+  }
+
+  void Merge(v1::MergePathsResponse* out) {
+    const v1::MergePathsRequest& request = *request_;
+    const v1::Session session = service_->sessions_.Touch(request.session(), "session", tenant_);
+    CheckBatchLimits(request.paths(), service_->options());
+    if (request.paths().paths_size() == 0) throw InputError("paths.paths", "must not be empty");
+    LoadedScene scene = service_->scenes_.Get(session.scene(), "session", token_);
+    token_.ThrowIfStopped();
+
+    MergeRequest merge{.paths = PathsFromProto(request.paths()),
+                       .measure = MeasureFromProto(request.measure()),
+                       .options = MergeOptionsFromProto(request.options())};
+    const int pool_threads = service_->pool().threads();
+    if (merge.options.threads <= 0 || merge.options.threads > pool_threads) {
+      merge.options.threads = pool_threads;
+    }
+    merge.cancel = token_;
+    merge.progress = [this](const Progress& progress) { OnProgress(progress); };
+    const double resolution = ResolutionFromProto(request.options(), *scene.proto);
+
+    auto stored = std::make_shared<StoredHGraph>();
+    stored->scene = scene;
+    stored->planner =
+        std::make_unique<LocalPlanner>(scene.world, LocalPlannerOptions{.resolution = resolution});
+    try {
+      stored->session = std::make_unique<HybridizationSession>(*stored->planner, merge);
+    } catch (const Error& e) {
+      // The engine names the paths as its own list ("paths[1].waypoints[3]"); the client sent
+      // them as the request's "paths.paths", as every other message here names them.
+      if (e.field().rfind("paths[", 0) != 0) throw;
+      throw Error(e.code(), "paths." + e.field(),
+                  std::string(e.what()).substr(e.field().size() + 2));
+    }
+    const MergeResult result = stored->session->Query(merge.measure, merge.progress, token_);
+    *out->mutable_result() = MergeResultToProto(result);
+    service_->RecordMerge("MergePaths", out->result());
+
+    const std::string name = service_->sessions_.AddHGraph(session.name());
+    const size_t bytes = stored->session->memory_bytes();
+    if (service_->cache_.Put(CacheKind::kHGraph, name, stored, bytes)) {
+      out->set_hgraph(name);
+    } else {
+      // Larger than the whole budget: the result stands, but there is nothing to re-query.
+      service_->sessions_.RemoveHGraph(name);
+      spdlog::warn("MergePaths session={} H-Graph of {} bytes exceeds --cache-bytes; not kept",
+                   session.name(), bytes);
+    }
+  }
+
+  // Called from engine worker threads.
+  void OnProgress(const Progress& progress) {
+    const Clock::time_point now = Clock::now();
+    {
+      std::lock_guard lock(mutex_);
+      if (writing_ || final_pending_) return;
+      // The first report goes out at once so that even a short merge shows progress, and so
+      // does each improvement of the post-optimization.
+      const bool improvement = !std::isnan(progress.objective);
+      if (sent_any_ && !improvement && now - last_sent_ < interval_) return;
+      writing_ = true;
+      sent_any_ = true;
+      last_sent_ = now;
+      v1::MergeProgress* p = progress_message_.mutable_progress();
+      p->set_phase(progress.phase);
+      p->set_done(progress.done);
+      p->set_total(progress.total);
+      p->set_collision_checks(progress.collision_checks);
+      p->set_distance_queries(progress.distance_queries);
+      p->set_elapsed_ms(std::chrono::duration<double, std::milli>(now - started_).count());
+      if (improvement) {
+        p->set_objective(progress.objective);
+      } else {
+        p->clear_objective();
+      }
+    }
+    StartWrite(&progress_message_);
+  }
+
+  void Complete(const grpc::Status& status, bool with_result) {
+    service_->RecordCall("MergePaths", request_->session(), started_, status);
+    bool send_final = false;
+    {
+      std::lock_guard lock(mutex_);
+      status_ = status;
+      with_result_ = with_result;
+      final_pending_ = true;
+      if (!writing_) send_final = final_sent_ = true;
+    }
+    if (send_final) SendFinal();
+  }
+
+  void SendFinal() {
+    if (with_result_) {
+      StartWriteAndFinish(&final_, grpc::WriteOptions(), grpc::Status::OK);
+    } else {
+      Finish(status_);
+    }
+  }
+
+  PathMergerService* service_;
+  const v1::MergePathsRequest* request_;
+  Clock::time_point started_ = Clock::now();
+  CancelToken token_;
+  std::string tenant_;  // the caller's (server/auth.h)
+  std::chrono::milliseconds interval_{100};
+
+  std::mutex mutex_;
+  bool writing_ = false;
+  bool sent_any_ = false;
+  bool final_pending_ = false;
+  bool final_sent_ = false;
+  Clock::time_point last_sent_;
+  v1::MergePathsResponse progress_message_;
+  v1::MergePathsResponse final_;
+  grpc::Status status_;
+  bool with_result_ = false;
+};
+
+grpc::ServerWriteReactor<v1::MergePathsResponse>* PathMergerService::MergePaths(
+    grpc::CallbackServerContext* context, const v1::MergePathsRequest* request) {
+  return new MergeCall(this, context, request);
+}
+
+}  // namespace hgraph::server

@@ -1,0 +1,173 @@
+#include <deque>
+#include <mutex>
+#include <string>
+#include <utility>
+
+#include "core/adapter/path_io.h"
+#include "core/adapter/scene_proto.h"
+#include "core/common/limits.h"
+#include "server/call_support.h"
+#include "server/service.h"
+#ifdef HGRAPH_HAVE_PLAN
+#include "core/plan/plan.h"
+#endif
+
+namespace hgraph::server {
+
+#ifdef HGRAPH_HAVE_PLAN
+// PlanPaths: plans on a worker; each path found is queued and written in order, one write in
+// flight, then the status.
+class PathMergerService::PlanCall final : public grpc::ServerWriteReactor<v1::PlanPathsResponse> {
+ public:
+  PlanCall(PathMergerService* service, grpc::CallbackServerContext* context,
+           const v1::PlanPathsRequest* request)
+      : service_(service), request_(request) {
+    WireDeadline(context, token_);
+    if (grpc::Status auth = service->options().auth.Authenticate(*context, &tenant_); !auth.ok()) {
+      Complete(auth);
+      return;
+    }
+    if (!service_->pool().TrySubmit([this](WorkerPool::Slot& slot) { Work(slot); })) {
+      Complete(Busy(service_->pool()));
+    }
+  }
+
+  void OnWriteDone(bool ok) override {
+    if (!ok) token_.Cancel();
+    Pump(/*write_done=*/true);
+  }
+  void OnCancel() override { token_.Cancel(); }
+  void OnDone() override { delete this; }
+
+ private:
+  void Work(WorkerPool::Slot& slot) {
+    const grpc::Status status = Invoke([&] { Plan(); }, token_);
+    slot.Release();
+    Complete(status);
+  }
+
+  void Plan() {
+    const v1::PlanPathsRequest& request = *request_;
+    const v1::Session session = service_->sessions_.Touch(request.session(), "session", tenant_);
+    if (request.count() < 0) {
+      throw InputError("count",
+                       "must be >= 0 (0 = one path), got " + std::to_string(request.count()));
+    }
+    if (request.time_per_path_s() != 0) {
+      limits::RequirePositiveUpTo(request.time_per_path_s(), limits::kMaxPlanSeconds,
+                                  "time_per_path_s");
+    }
+    if (request.count() > service_->options().max_paths) {
+      throw Error(ErrorCode::kResourceExhausted, "count",
+                  std::to_string(request.count()) + " paths exceed the limit of " +
+                      std::to_string(service_->options().max_paths) + " (--max-paths)");
+    }
+    LoadedScene scene = service_->scenes_.Get(session.scene(), "session", token_);
+    const Scene& model = scene.world->scene();
+    PlanRequest plan{.planner = request.planner().empty()
+                                    ? PlanRequest().planner
+                                    : ParsePlannerType(request.planner(), "planner"),
+                     .count = request.count() == 0 ? 1 : request.count(),
+                     .time_s = request.time_per_path_s() > 0 ? request.time_per_path_s() : 1.0,
+                     .seed = request.seed(),
+                     .simplify = request.simplify(),
+                     .resolution = request.has_resolution() ? request.resolution()
+                                                            : SceneResolution(*scene.proto)};
+    if (request.has_start()) {
+      plan.start = ConfigFromProto(request.start());
+    } else if (model.start) {
+      plan.start = *model.start;
+    } else {
+      throw InputError("start", "must be set: the scene has no start of its own");
+    }
+    if (request.has_goal()) {
+      plan.goal = ConfigFromProto(request.goal());
+    } else if (model.goal) {
+      plan.goal = *model.goal;
+    } else {
+      throw InputError("goal", "must be set: the scene has no goal of its own");
+    }
+    plan.cancel = token_;
+    plan.on_path = [this](int index, const InputPath& path, double elapsed_ms) {
+      v1::PlanPathsResponse event;
+      *event.mutable_path() = PathToProto(path);
+      event.set_index(index);
+      event.set_elapsed_ms(elapsed_ms);
+      {
+        std::lock_guard lock(mutex_);
+        queue_.push_back(std::move(event));
+      }
+      Pump(/*write_done=*/false);
+    };
+    LocalPlanner checker(scene.world, LocalPlannerOptions{.resolution = plan.resolution});
+    ::hgraph::PlanPaths(checker, plan);
+  }
+
+  void Complete(const grpc::Status& status) {
+    service_->RecordCall("PlanPaths", request_->session(), started_, status);
+    {
+      std::lock_guard lock(mutex_);
+      status_ = status;
+      done_ = true;
+    }
+    Pump(/*write_done=*/false);
+  }
+
+  // Starts the next write, or the Finish once the queue is drained after the work is done.
+  void Pump(bool write_done) {
+    enum { kNothing, kWrite, kFinish } action = kNothing;
+    {
+      std::lock_guard lock(mutex_);
+      if (write_done) {
+        writing_ = false;
+        queue_.pop_front();
+      }
+      if (writing_ || finished_) return;
+      if (!queue_.empty()) {
+        writing_ = true;
+        action = kWrite;
+      } else if (done_) {
+        finished_ = true;
+        action = kFinish;
+      }
+    }
+    // The front element stays put until its write is done (deque keeps references stable).
+    if (action == kWrite) StartWrite(&queue_.front());
+    if (action == kFinish) Finish(status_);
+  }
+
+  PathMergerService* service_;
+  const v1::PlanPathsRequest* request_;
+  Clock::time_point started_ = Clock::now();
+  CancelToken token_;
+  std::string tenant_;  // the caller's (server/auth.h)
+  std::mutex mutex_;
+  std::deque<v1::PlanPathsResponse> queue_;
+  bool writing_ = false;
+  bool done_ = false;
+  bool finished_ = false;
+  grpc::Status status_;
+};
+
+grpc::ServerWriteReactor<v1::PlanPathsResponse>* PathMergerService::PlanPaths(
+    grpc::CallbackServerContext* context, const v1::PlanPathsRequest* request) {
+  return new PlanCall(this, context, request);
+}
+#else
+grpc::ServerWriteReactor<v1::PlanPathsResponse>* PathMergerService::PlanPaths(
+    grpc::CallbackServerContext*, const v1::PlanPathsRequest* request) {
+  // Finishes at once: this build has no OMPL planners.
+  class Unimplemented final : public grpc::ServerWriteReactor<v1::PlanPathsResponse> {
+   public:
+    explicit Unimplemented(const grpc::Status& status) { Finish(status); }
+    void OnDone() override { delete this; }
+  };
+  const grpc::Status status(grpc::StatusCode::UNIMPLEMENTED,
+                            "PlanPaths: this server was built without core/plan (the OMPL "
+                            "input planners); generate paths on the client");
+  RecordCall("PlanPaths", request->session(), Clock::now(), status);
+  return new Unimplemented(status);
+}
+#endif
+
+}  // namespace hgraph::server
