@@ -114,7 +114,8 @@ void AddConnectionFlags(CLI::App* app, RemoteOptions* remote) {
                   "--tls-key)");
   app->add_option("--tls-key", remote->tls_key, "With --server: PEM private key of --tls-cert");
   app->add_option("--token", remote->token,
-                  "With --server: bearer token sent as \"authorization: Bearer TOKEN\"")
+                  "With --server: bearer token sent as \"authorization: Bearer TOKEN\" (prefer "
+                  "$HGRAPH_TOKEN: a flag shows in the process list)")
       ->envname("HGRAPH_TOKEN");
 }
 
