@@ -10,6 +10,7 @@
 #include <signal.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
+#include <sys/stat.h>
 #include <tbb/info.h>
 
 #include <CLI/CLI.hpp>
@@ -179,6 +180,11 @@ int main(int argc, char** argv) {
       // Counts only: the file's contents are secrets and never reach the log.
       spdlog::info("--auth-tokens: {} tokens for {} tenants", tokens.size(),
                    tokens.tenants().size());
+      struct stat file {};
+      if (::stat(flags.auth_tokens.c_str(), &file) == 0 && (file.st_mode & 077) != 0) {
+        spdlog::warn("--auth-tokens: {} is readable by other users (chmod 600 it)",
+                     flags.auth_tokens);
+      }
       options.auth = hgraph::server::Authenticator(tokens);
     }
     hgraph::server::Metrics metrics;

@@ -90,7 +90,10 @@ def merge_once(client):
 
 
 def stopped(server):
-    assert server.stop() == 0, "".join(server.log)
+    """Stops the server and returns its whole log (the reader ends at the log's end)."""
+    code = server.stop()
+    server._reader.join(timeout=10)
+    assert code == 0, "".join(server.log)
     return "".join(server.log)
 
 
@@ -189,6 +192,16 @@ def test_bad_token_files_are_refused_at_start_without_quoting_them(tmp_path, tex
     assert TOKEN_A not in done.stderr
 
 
+def test_a_token_file_others_can_read_is_warned_about(tmp_path):
+    path = tmp_path / "tokens.txt"
+    path.write_text(f"{TOKEN_A} team-a\n")
+    path.chmod(0o644)
+    server = Server("--auth-tokens", str(path))
+    log = stopped(server)
+    assert f"--auth-tokens: {path} is readable by other users" in log
+    assert TOKEN_A not in log
+
+
 @pytest.fixture(scope="module")
 def token_server(pki, tokens):
     """TLS plus bearer tokens for two tenants."""
@@ -198,6 +211,7 @@ def token_server(pki, tokens):
     log = stopped(server)
     # The log counts tokens and tenants; it never holds a token, right or wrong.
     assert "--auth-tokens: 2 tokens for 2 tenants" in log
+    assert "readable by other users" not in log  # the fixture's file is 0600
     for secret in (TOKEN_A, TOKEN_B, WRONG):
         assert secret not in log
 
