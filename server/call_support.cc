@@ -11,44 +11,13 @@ namespace {
 
 constexpr char kService[] = "hgraph.v1.PathMerger";
 
+const char* CallType(const std::string& method) {
+  if (method == "MergePaths" || method == "PlanPaths") return "server_stream";
+  if (method == "UploadBlob") return "client_stream";
+  return "unary";
+}
+
 }  // namespace
-
-const char* CodeName(grpc::StatusCode code) {
-  switch (code) {
-    case grpc::StatusCode::OK: return "OK";
-    case grpc::StatusCode::CANCELLED: return "CANCELLED";
-    case grpc::StatusCode::UNKNOWN: return "UNKNOWN";
-    case grpc::StatusCode::INVALID_ARGUMENT: return "INVALID_ARGUMENT";
-    case grpc::StatusCode::DEADLINE_EXCEEDED: return "DEADLINE_EXCEEDED";
-    case grpc::StatusCode::NOT_FOUND: return "NOT_FOUND";
-    case grpc::StatusCode::ALREADY_EXISTS: return "ALREADY_EXISTS";
-    case grpc::StatusCode::PERMISSION_DENIED: return "PERMISSION_DENIED";
-    case grpc::StatusCode::UNAUTHENTICATED: return "UNAUTHENTICATED";
-    case grpc::StatusCode::RESOURCE_EXHAUSTED: return "RESOURCE_EXHAUSTED";
-    case grpc::StatusCode::FAILED_PRECONDITION: return "FAILED_PRECONDITION";
-    case grpc::StatusCode::ABORTED: return "ABORTED";
-    case grpc::StatusCode::OUT_OF_RANGE: return "OUT_OF_RANGE";
-    case grpc::StatusCode::UNIMPLEMENTED: return "UNIMPLEMENTED";
-    case grpc::StatusCode::INTERNAL: return "INTERNAL";
-    case grpc::StatusCode::UNAVAILABLE: return "UNAVAILABLE";
-    case grpc::StatusCode::DATA_LOSS: return "DATA_LOSS";
-    default: return "UNKNOWN";
-  }
-}
-
-grpc::StatusCode ToGrpcCode(ErrorCode code) {
-  switch (code) {
-    case ErrorCode::kInvalidArgument: return grpc::StatusCode::INVALID_ARGUMENT;
-    case ErrorCode::kNotFound: return grpc::StatusCode::NOT_FOUND;
-    case ErrorCode::kFailedPrecondition: return grpc::StatusCode::FAILED_PRECONDITION;
-    case ErrorCode::kCancelled: return grpc::StatusCode::CANCELLED;
-    case ErrorCode::kDeadlineExceeded: return grpc::StatusCode::DEADLINE_EXCEEDED;
-    case ErrorCode::kResourceExhausted: return grpc::StatusCode::RESOURCE_EXHAUSTED;
-    case ErrorCode::kUnauthenticated: return grpc::StatusCode::UNAUTHENTICATED;
-    case ErrorCode::kPermissionDenied: return grpc::StatusCode::PERMISSION_DENIED;
-  }
-  return grpc::StatusCode::UNKNOWN;
-}
 
 grpc::Status Invoke(const std::function<void()>& body, const CancelToken& token) {
   try {
@@ -98,22 +67,44 @@ void CheckBatchLimits(const v1::PathSet& paths, const ServerOptions& options) {
   }
 }
 
+MergeResult QueryStored(PathMergerService::StoredHGraph& stored, const MeasureSpec& measure,
+                        const ProgressCallback& progress, const CancelToken& token) {
+  std::unique_ptr<HybridizationSession> copy;
+  uint64_t version = 0;
+  {
+    std::lock_guard lock(stored.mutex);
+    copy = std::make_unique<HybridizationSession>(stored.session->Clone());
+    version = stored.version;
+  }
+  MergeResult result = copy->Query(measure, progress, token);
+  {
+    std::lock_guard lock(stored.mutex);
+    if (stored.version == version) {
+      // The old session goes when `copy` does, outside the lock.
+      std::swap(stored.session, copy);
+      ++stored.version;
+    }
+  }
+  return result;
+}
+
+Clock::time_point PathMergerService::RecordStart(const std::string& method) {
+  families_.rpc_started.Increment(
+      {{"grpc_type", CallType(method)}, {"grpc_service", kService}, {"grpc_method", method}});
+  return Clock::now();
+}
+
 void PathMergerService::RecordCall(const std::string& method, const std::string& session,
                                    Clock::time_point started, const grpc::Status& status) {
   const double seconds = std::chrono::duration<double>(Clock::now() - started).count();
-  const char* code = CodeName(status.error_code());
-  const std::string type = method == "MergePaths" || method == "PlanPaths" ? "server_stream"
-                           : method == "UploadBlob"                        ? "client_stream"
-                                                                           : "unary";
-  metrics_.Increment("grpc_server_started_total",
-                     {{"grpc_type", type}, {"grpc_service", kService}, {"grpc_method", method}});
-  metrics_.Increment("grpc_server_handled_total", {{"grpc_type", type},
-                                                   {"grpc_service", kService},
-                                                   {"grpc_method", method},
-                                                   {"grpc_code", code}});
-  metrics_.Observe("grpc_server_handling_seconds",
-                   {{"grpc_type", type}, {"grpc_service", kService}, {"grpc_method", method}},
-                   seconds);
+  const char* code = GrpcCodeName(status.error_code());
+  const std::string type = CallType(method);
+  families_.rpc_handled.Increment({{"grpc_type", type},
+                                   {"grpc_service", kService},
+                                   {"grpc_method", method},
+                                   {"grpc_code", code}});
+  families_.rpc_handling_seconds.Observe(
+      {{"grpc_type", type}, {"grpc_service", kService}, {"grpc_method", method}}, seconds);
   if (status.ok()) {
     spdlog::info("{} session={} status={} duration_ms={:.1f}", method,
                  session.empty() ? "-" : session, code, seconds * 1e3);
@@ -125,24 +116,19 @@ void PathMergerService::RecordCall(const std::string& method, const std::string&
 
 void PathMergerService::RecordMerge(const std::string& method, const v1::MergeResult& result) {
   const Labels labels = {{"method", method}};
-  metrics_.Increment("hgraph_merges_total", labels);
+  families_.merges.Increment(labels);
   const v1::MergeStats& stats = result.stats();
-  metrics_.Increment("hgraph_merge_collision_checks_total", labels,
-                     static_cast<double>(stats.collision_checks()));
-  metrics_.Increment("hgraph_merge_distance_queries_total", labels,
-                     static_cast<double>(stats.distance_queries()));
-  metrics_.Increment("hgraph_merge_edges_checked_total", labels,
-                     static_cast<double>(stats.edges_checked()));
-  metrics_.Increment("hgraph_merge_edges_reused_total", labels,
-                     static_cast<double>(stats.edges_reused()));
+  families_.collision_checks.Increment(labels, static_cast<double>(stats.collision_checks()));
+  families_.distance_queries.Increment(labels, static_cast<double>(stats.distance_queries()));
+  families_.edges_checked.Increment(labels, static_cast<double>(stats.edges_checked()));
+  families_.edges_reused.Increment(labels, static_cast<double>(stats.edges_reused()));
   const v1::Timing& t = result.timing();
   const std::pair<const char*, double> phases[] = {
       {"validate", t.validate_ms()},     {"inputs", t.inputs_ms()}, {"align", t.align_ms()},
       {"candidates", t.candidates_ms()}, {"check", t.check_ms()},   {"search", t.search_ms()},
       {"evaluate", t.evaluate_ms()}};
   for (const auto& [phase, ms] : phases) {
-    metrics_.Observe("hgraph_merge_phase_seconds", {{"method", method}, {"phase", phase}},
-                     ms / 1e3);
+    families_.merge_phase_seconds.Observe({{"method", method}, {"phase", phase}}, ms / 1e3);
   }
 }
 

@@ -6,6 +6,7 @@
 #include <grpcpp/grpcpp.h>
 
 #include <chrono>
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <mutex>
@@ -17,16 +18,12 @@
 #include "hgraph/v1/service.pb.h"
 #include "server/scene_store.h"
 #include "server/service.h"
+#include "server/status/status.h"
 #include "server/worker_pool.h"
 
 namespace hgraph::server {
 
 using Clock = std::chrono::steady_clock;
-
-// The canonical name of a gRPC status code ("INVALID_ARGUMENT").
-const char* CodeName(grpc::StatusCode code);
-// The canonical code an engine error maps to.
-grpc::StatusCode ToGrpcCode(ErrorCode code);
 
 // Runs `body` and turns whatever it throws into a canonical status. A cancellation that comes
 // from the passed deadline (gRPC cancels the call at the deadline too) is DEADLINE_EXCEEDED.
@@ -42,12 +39,20 @@ grpc::Status Busy(const WorkerPool& pool);
 void CheckBatchLimits(const v1::PathSet& paths, const ServerOptions& options);
 
 // An H-Graph kept for re-queries, with the local planner its edges were checked with.
-// HybridizationSession is not thread safe, so queries on one H-Graph are serialised.
 struct PathMergerService::StoredHGraph {
-  std::mutex mutex;
+  std::mutex mutex;  // guards session and version
   LoadedScene scene;
   std::unique_ptr<LocalPlanner> planner;
   std::unique_ptr<HybridizationSession> session;
+  uint64_t version = 0;  // bumped each time a query's copy replaces `session`
 };
+
+// Searches a stored H-Graph under `measure` (Requery) without holding it: the query runs on a
+// copy taken under the mutex, and the copy, with the edges the query checked, replaces the
+// stored session if no other query did so meanwhile (else its checks are dropped; the answer
+// stands either way). The copy costs memory for the length of the query, not the H-Graph's
+// lock for every other caller.
+MergeResult QueryStored(PathMergerService::StoredHGraph& stored, const MeasureSpec& measure,
+                        const ProgressCallback& progress, const CancelToken& token);
 
 }  // namespace hgraph::server

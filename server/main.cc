@@ -16,6 +16,7 @@
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
+#include <limits>
 #include <memory>
 #include <string>
 
@@ -70,9 +71,10 @@ int main(int argc, char** argv) {
                  "calls queued or running on the workers before RESOURCE_EXHAUSTED")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
+  // gRPC takes the limit as an int.
   app.add_option("--max-message-bytes", flags.max_message_bytes,
                  "largest gRPC message received or sent")
-      ->check(CLI::PositiveNumber)
+      ->check(CLI::Range(int64_t{1}, int64_t{std::numeric_limits<int>::max()}))
       ->capture_default_str();
   app.add_option("--max-paths", flags.max_paths, "input paths per MergePaths batch")
       ->check(CLI::PositiveNumber)
@@ -134,7 +136,8 @@ int main(int argc, char** argv) {
                  "file of \"TOKEN TENANT\" lines: every call needs \"authorization: Bearer "
                  "TOKEN\"; sessions and H-Graphs belong to the token's tenant (health stays open)")
       ->check(CLI::ExistingFile);
-  app.add_option("--log-level", flags.log_level, "trace, debug, info, warn, error")
+  app.add_option("--log-level", flags.log_level, "log verbosity")
+      ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}))
       ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
 

@@ -106,16 +106,41 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
     *out->mutable_result() = MergeResultToProto(result);
     service_->RecordMerge("MergePaths", out->result());
 
-    const std::string name = service_->sessions_.AddHGraph(session.name());
+    Keep(session.name(), std::move(stored), out);
+  }
+
+  // Stores the H-Graph for re-queries and names it in `out`. A session deleted (or expired)
+  // while the merge ran gets no H-Graph, but the client still gets its result.
+  void Keep(const std::string& session, std::shared_ptr<StoredHGraph> stored,
+            v1::MergePathsResponse* out) {
+    std::string name;
+    try {
+      name = service_->sessions_.AddHGraph(session);
+    } catch (const Error& e) {
+      if (e.code() != ErrorCode::kNotFound) throw;
+      spdlog::info("MergePaths session={} was deleted while the merge ran; H-Graph not kept",
+                   session);
+      return;
+    }
     const size_t bytes = stored->session->memory_bytes();
-    if (service_->cache_.Put(CacheKind::kHGraph, name, stored, bytes)) {
-      out->set_hgraph(name);
-    } else {
+    if (!service_->cache_.Put(CacheKind::kHGraph, name, std::move(stored), bytes)) {
       // Larger than the whole budget: the result stands, but there is nothing to re-query.
       service_->sessions_.RemoveHGraph(name);
       spdlog::warn("MergePaths session={} H-Graph of {} bytes exceeds --cache-bytes; not kept",
-                   session.name(), bytes);
+                   session, bytes);
+      return;
     }
+    try {
+      // Deleted between AddHGraph and the Put: DeleteSession could not drop what was not yet
+      // in the cache, so this call does.
+      // (Re-created since by another tenant: not this call's session any more either.)
+      service_->sessions_.Touch(session, "session", tenant_);
+    } catch (const Error& e) {
+      if (e.code() != ErrorCode::kNotFound && e.code() != ErrorCode::kPermissionDenied) throw;
+      service_->cache_.Erase(CacheKind::kHGraph, name);
+      return;
+    }
+    out->set_hgraph(name);
   }
 
   // Called from engine worker threads.
@@ -170,7 +195,7 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
 
   PathMergerService* service_;
   const v1::MergePathsRequest* request_;
-  Clock::time_point started_ = Clock::now();
+  Clock::time_point started_ = service_->RecordStart("MergePaths");
   CancelToken token_;
   std::string tenant_;  // the caller's (server/auth.h)
   std::chrono::milliseconds interval_{100};

@@ -138,7 +138,7 @@ class PathMergerService::PlanCall final : public grpc::ServerWriteReactor<v1::Pl
 
   PathMergerService* service_;
   const v1::PlanPathsRequest* request_;
-  Clock::time_point started_ = Clock::now();
+  Clock::time_point started_ = service_->RecordStart("PlanPaths");
   CancelToken token_;
   std::string tenant_;  // the caller's (server/auth.h)
   std::mutex mutex_;
@@ -165,7 +165,7 @@ grpc::ServerWriteReactor<v1::PlanPathsResponse>* PathMergerService::PlanPaths(
   const grpc::Status status(grpc::StatusCode::UNIMPLEMENTED,
                             "PlanPaths: this server was built without core/plan (the OMPL "
                             "input planners); generate paths on the client");
-  RecordCall("PlanPaths", request->session(), Clock::now(), status);
+  RecordCall("PlanPaths", request->session(), RecordStart("PlanPaths"), status);
   return new Unimplemented(status);
 }
 #endif

@@ -19,7 +19,12 @@ std::string CanonicalBytes(const v1::Scene& scene) {
     google::protobuf::io::StringOutputStream stream(&bytes);
     google::protobuf::io::CodedOutputStream coded(&stream);
     coded.SetSerializationDeterministic(true);
-    scene.SerializeToCodedStream(&coded);
+    if (!scene.SerializeToCodedStream(&coded) || coded.HadError()) {
+      // Only a message past protobuf's 2 GiB limit fails here; gRPC's own limit is far lower.
+      throw Error(ErrorCode::kResourceExhausted, "scene",
+                  "cannot be serialized (" + std::to_string(scene.ByteSizeLong()) +
+                      " bytes); store a smaller scene");
+    }
   }
   return bytes;
 }
@@ -65,7 +70,7 @@ void ValidateDigest(const v1::Digest& digest, const std::string& field) {
   }
 }
 
-SceneStore::SceneStore(ResourceCache& cache, Metrics& metrics, MeshImporter importer)
+SceneStore::SceneStore(ResourceCache& cache, ServiceMetrics& metrics, MeshImporter importer)
     : cache_(cache), metrics_(metrics), importer_(std::move(importer)) {}
 
 bool SceneStore::HasBlob(const v1::Digest& digest) const {
@@ -140,7 +145,7 @@ LoadedScene SceneStore::Get(const v1::Digest& digest, const std::string& field,
     if (auto world = cache_.Get<const CollisionWorld>(CacheKind::kWorld, sha)) {
       auto proto = cache_.Get<const v1::Scene>(CacheKind::kScene, sha);
       if (proto) {
-        metrics_.Increment("hgraph_scene_cache_hits_total", {});
+        metrics_.scene_cache_hits.Increment();
         return LoadedScene{proto, world};
       }
     }
@@ -152,10 +157,10 @@ LoadedScene SceneStore::Get(const v1::Digest& digest, const std::string& field,
   }
   if (pending.valid()) {
     // Another call is loading the same scene: this one shares its result.
-    metrics_.Increment("hgraph_scene_cache_hits_total", {});
+    metrics_.scene_cache_hits.Increment();
     return pending.get();
   }
-  metrics_.Increment("hgraph_scene_cache_misses_total", {});
+  metrics_.scene_cache_misses.Increment();
   try {
     LoadedScene loaded = Load(sha, field, token);
     promise.set_value(loaded);
@@ -199,8 +204,15 @@ LoadedScene SceneStore::Load(const std::string& sha, const std::string& field,
     throw;
   }
   auto world = std::make_shared<const CollisionWorld>(scene);
-  metrics_.Increment("hgraph_scene_loads_total", {});
-  cache_.Put(CacheKind::kWorld, sha, world, world->memory_bytes());
+  metrics_.scene_loads.Increment();
+  // A world that cannot be kept would be loaded again by every call that names the scene.
+  if (!cache_.Put(CacheKind::kWorld, sha, world, world->memory_bytes())) {
+    throw Error(ErrorCode::kResourceExhausted, field,
+                "scene sha256:" + sha + " needs " + std::to_string(world->memory_bytes()) +
+                    " bytes of collision geometry, more than the server's cache budget "
+                    "(--cache-bytes=" +
+                    std::to_string(cache_.budget_bytes()) + ")");
+  }
   return LoadedScene{proto, world};
 }
 

@@ -28,7 +28,7 @@ struct LoadedScene {
 class SceneStore {
  public:
   // Mesh bytes are parsed by `importer`, in a child process per mesh.
-  SceneStore(ResourceCache& cache, Metrics& metrics, MeshImporter importer);
+  SceneStore(ResourceCache& cache, ServiceMetrics& metrics, MeshImporter importer);
   SceneStore(const SceneStore&) = delete;
   SceneStore& operator=(const SceneStore&) = delete;
 
@@ -55,7 +55,7 @@ class SceneStore {
   LoadedScene Load(const std::string& sha, const std::string& field, const CancelToken& token);
 
   ResourceCache& cache_;
-  Metrics& metrics_;
+  ServiceMetrics& metrics_;
   MeshImporter importer_;
   std::mutex loading_mutex_;
   std::map<std::string, std::shared_future<LoadedScene>> loading_;

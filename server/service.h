@@ -92,11 +92,14 @@ class PathMergerService final : public v1::PathMerger::CallbackService {
   class MergeCall;
   class PlanCall;
 
+  // Counts the call as started (grpc_server_started_total) and returns its start time.
+  std::chrono::steady_clock::time_point RecordStart(const std::string& method);
   void DropHGraphs(const std::vector<std::string>& names);
   void RecordMerge(const std::string& method, const v1::MergeResult& result);
 
   ServerOptions options_;
   Metrics& metrics_;
+  ServiceMetrics families_;  // declared in metrics_; before scenes_, which counts into them
   ResourceCache cache_;
   SceneStore scenes_;
   SessionRegistry sessions_;

@@ -60,7 +60,7 @@ class PathMergerService::UnaryCall final : public grpc::ServerUnaryReactor {
   PathMergerService* service_;
   std::string method_;
   std::string session_;
-  Clock::time_point started_ = Clock::now();
+  Clock::time_point started_ = service_->RecordStart(method_);
   CancelToken token_;
   grpc::Status auth_;
   std::string tenant_;
@@ -165,8 +165,7 @@ grpc::ServerUnaryReactor* PathMergerService::Requery(grpc::CallbackServerContext
                           "never built here); merge the paths again");
         }
         const MeasureSpec measure = MeasureFromProto(request->measure());
-        std::lock_guard lock(stored->mutex);
-        const MergeResult result = stored->session->Query(measure, {}, token);
+        const MergeResult result = QueryStored(*stored, measure, {}, token);
         *response->mutable_result() = MergeResultToProto(result);
         response->set_hgraph(request->hgraph());
         RecordMerge("Requery", response->result());
@@ -211,12 +210,9 @@ grpc::ServerUnaryReactor* PathMergerService::CheckPaths(grpc::CallbackServerCont
         response->set_resolution(resolution);
         response->set_elapsed_ms(result.elapsed_ms);
         const Labels labels = {{"method", "CheckPaths"}};
-        metrics_.Increment("hgraph_merge_collision_checks_total", labels,
-                           static_cast<double>(result.collision_checks));
-        metrics_.Increment("hgraph_merge_distance_queries_total", labels,
-                           static_cast<double>(result.distance_queries));
-        metrics_.Increment("hgraph_merge_edges_checked_total", labels,
-                           static_cast<double>(result.edges_checked));
+        families_.collision_checks.Increment(labels, static_cast<double>(result.collision_checks));
+        families_.distance_queries.Increment(labels, static_cast<double>(result.distance_queries));
+        families_.edges_checked.Increment(labels, static_cast<double>(result.edges_checked));
       },
       /*on_worker=*/true);
   return call;

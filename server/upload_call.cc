@@ -83,7 +83,7 @@ class PathMergerService::UploadCall final : public grpc::ServerReadReactor<v1::U
   v1::Digest digest_;
   std::string bytes_;
   bool first_ = true;
-  Clock::time_point started_ = Clock::now();
+  Clock::time_point started_ = service_->RecordStart("UploadBlob");
   CancelToken token_;
 };
 

@@ -23,42 +23,13 @@
 #include "core/common/error.h"
 #include "core/hgraph/bridge_candidates.h"
 #include "core/measure/measure.h"
+#include "server/status/status.h"
 
 namespace hgraph::cli {
 namespace {
 
 // Well under gRPC's default 4 MiB message limit.
 constexpr size_t kChunkBytes = size_t{1} << 20;
-
-ErrorCode FromGrpc(grpc::StatusCode code) {
-  switch (code) {
-    case grpc::StatusCode::INVALID_ARGUMENT: return ErrorCode::kInvalidArgument;
-    case grpc::StatusCode::NOT_FOUND: return ErrorCode::kNotFound;
-    case grpc::StatusCode::CANCELLED: return ErrorCode::kCancelled;
-    case grpc::StatusCode::DEADLINE_EXCEEDED: return ErrorCode::kDeadlineExceeded;
-    case grpc::StatusCode::RESOURCE_EXHAUSTED: return ErrorCode::kResourceExhausted;
-    case grpc::StatusCode::UNAUTHENTICATED: return ErrorCode::kUnauthenticated;
-    case grpc::StatusCode::PERMISSION_DENIED: return ErrorCode::kPermissionDenied;
-    default: return ErrorCode::kFailedPrecondition;
-  }
-}
-
-const char* CodeName(grpc::StatusCode code) {
-  switch (code) {
-    case grpc::StatusCode::CANCELLED: return "CANCELLED";
-    case grpc::StatusCode::INVALID_ARGUMENT: return "INVALID_ARGUMENT";
-    case grpc::StatusCode::DEADLINE_EXCEEDED: return "DEADLINE_EXCEEDED";
-    case grpc::StatusCode::NOT_FOUND: return "NOT_FOUND";
-    case grpc::StatusCode::RESOURCE_EXHAUSTED: return "RESOURCE_EXHAUSTED";
-    case grpc::StatusCode::FAILED_PRECONDITION: return "FAILED_PRECONDITION";
-    case grpc::StatusCode::UNIMPLEMENTED: return "UNIMPLEMENTED";
-    case grpc::StatusCode::UNAVAILABLE: return "UNAVAILABLE";
-    case grpc::StatusCode::INTERNAL: return "INTERNAL";
-    case grpc::StatusCode::UNAUTHENTICATED: return "UNAUTHENTICATED";
-    case grpc::StatusCode::PERMISSION_DENIED: return "PERMISSION_DENIED";
-    default: return "UNKNOWN";
-  }
-}
 
 // True for the codes that say the request was judged and rejected (exit 2); every other code
 // means the server was unreachable or failed (exit 3).
@@ -78,12 +49,12 @@ bool RejectsRequest(grpc::StatusCode code) {
 
 void Check(const grpc::Status& status, const char* method) {
   if (status.ok()) return;
-  const std::string message = std::string(CodeName(status.error_code())) + " from " + method +
+  const std::string message = std::string(GrpcCodeName(status.error_code())) + " from " + method +
                               ": " + status.error_message();
   if (!RejectsRequest(status.error_code())) {
-    throw ServerFailure(FromGrpc(status.error_code()), "", message);
+    throw ServerFailure(FromGrpcCode(status.error_code()), "", message);
   }
-  throw Error(FromGrpc(status.error_code()), "", message);
+  throw Error(FromGrpcCode(status.error_code()), "", message);
 }
 
 // A file named by a flag; Error(kNotFound, flag) when it cannot be read.

@@ -292,6 +292,7 @@ MergeResult MergeResultFromProto(const v1::MergeResult& proto) {
                               .total_ms = t.total_ms()};
   result.source_path.assign(proto.source_path().begin(), proto.source_path().end());
   result.source_index.assign(proto.source_index().begin(), proto.source_index().end());
+  result.source_fraction.assign(proto.source_fraction().begin(), proto.source_fraction().end());
   result.measure = MeasureFromProto(proto.measure());
   result.variant = VariantFromProto(proto.variant());
   result.best_input = proto.best_input();

@@ -108,7 +108,7 @@ struct MergeResult {
 };
 
 // An H-Graph built once and searched under any number of measures. Not thread safe: callers
-// serialise queries on one instance. Not copyable (it may be large); movable.
+// serialise queries on one instance. Movable; copied only explicitly (Clone: it may be large).
 class HybridizationSession {
  public:
   // Validates the request and builds the H-Graph (phases validate, inputs, align, check).
@@ -116,6 +116,9 @@ class HybridizationSession {
   // Error(kFailedPrecondition) if no input path is valid.
   HybridizationSession(const MotionChecker& checker, const MergeRequest& request);
   HybridizationSession(HybridizationSession&&) = default;
+  // A copy that can be queried while the original serves other callers (the server's
+  // re-queries); shares the checker.
+  HybridizationSession Clone() const { return HybridizationSession(*this); }
 
   // Searches under `measure`, computing clearance profiles only for valid edges that lack one.
   // Throws InputError for a bad measure and Error(kFailedPrecondition) if no path satisfies it.
@@ -138,6 +141,7 @@ class HybridizationSession {
   size_t memory_bytes() const;
 
  private:
+  HybridizationSession(const HybridizationSession&) = default;
   // Checks the edges in parallel; input edges always get their clearance profile (inputs are
   // reported under every measure), bridges only with need_clearance.
   void CheckEdges(const std::vector<int>& edge_ids, bool need_clearance, const std::string& phase,

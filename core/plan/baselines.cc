@@ -23,6 +23,8 @@ InputPath ShortcutPath(const MotionChecker& checker, const InputPath& path,
   const ob::SpaceInformationPtr si = MakeSpaceInformation(checker, options.resolution);
   og::PathGeometric omplPath = ToOmplPath(si, space, path);
   og::PathSimplifier simplifier(si);
+  // The simplifier's own generator is drawn; reduceVertices and shortcutPath use only it.
+  lock.unlock();
   for (int round = 0; round < options.max_rounds; ++round) {
     // Non-short-circuit: both heuristics run every round.
     const bool reduced = simplifier.reduceVertices(omplPath);

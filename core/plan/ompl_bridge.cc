@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <deque>
 #include <string>
 #include <utility>
 
@@ -265,6 +266,23 @@ InputPath FromOmplPath(const Space& space, const og::PathGeometric& path, std::s
 std::unique_lock<std::mutex> LockOmplRandomness() {
   static std::mutex mutex;
   return std::unique_lock<std::mutex>(mutex);
+}
+
+void PrepareSamplers(const ob::SpaceInformationPtr& si, int count) {
+  struct Prepared {
+    std::mutex mutex;
+    std::deque<ob::StateSamplerPtr> samplers;
+  };
+  auto prepared = std::make_shared<Prepared>();
+  const ob::StateSpacePtr& space = si->getStateSpace();
+  for (int i = 0; i < count; ++i) prepared->samplers.push_back(space->allocDefaultStateSampler());
+  space->setStateSamplerAllocator([prepared](const ob::StateSpace* s) -> ob::StateSamplerPtr {
+    std::lock_guard lock(prepared->mutex);
+    if (prepared->samplers.empty()) return s->allocDefaultStateSampler();
+    ob::StateSamplerPtr sampler = std::move(prepared->samplers.front());
+    prepared->samplers.pop_front();
+    return sampler;
+  });
 }
 
 void SeedOmpl(uint64_t seed) {

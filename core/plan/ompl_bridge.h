@@ -43,9 +43,15 @@ InputPath FromOmplPath(const Space& space, const ompl::geometric::PathGeometric&
 // Serialises every use of OMPL's process-wide seed generator: ompl::RNG::setSeed reseeds the
 // generator from which each RNG that OMPL constructs afterwards (planners, samplers, nearest
 // neighbour structures, the simplifier) draws its own seed. Hold the lock from setSeed until the
-// last OMPL object that draws random numbers has been constructed *and used*, since samplers are
-// made lazily inside solve().
+// last OMPL object of the run that draws a seed has been constructed; planners make their
+// samplers lazily inside solve(), so PrepareSamplers makes them beforehand. The run itself
+// (solve, shortcutting) then uses only its own objects and goes without the lock, so that
+// concurrent runs plan in parallel.
 std::unique_lock<std::mutex> LockOmplRandomness();
+// Makes `count` state samplers of si's space now (the caller holds the lock), and has the space
+// hand them out, in order, to whatever asks for one later (a planner inside solve(), a valid
+// state sampler); past `count`, new samplers are made as usual (seeded, but not reproducibly).
+void PrepareSamplers(const ompl::base::SpaceInformationPtr& si, int count);
 // Reseeds OMPL's generator (caller holds the lock); silences OMPL's complaint that seeds were
 // already drawn, which is expected: we reseed before every run on purpose.
 void SeedOmpl(uint64_t seed);

@@ -124,11 +124,19 @@ PlanResult PlanPaths(const MotionChecker& checker, const PlanRequest& request) {
     const std::string name =
         std::string(PlannerTypeName(request.planner)) + "-" + std::to_string(index);
     InputPath path;
+    ob::SpaceInformationPtr si;
+    ob::ProblemDefinitionPtr pdef;
+    ob::PlannerPtr planner;
     {
+      // Everything that draws a seed from OMPL's generator is made here, under the lock; the
+      // search below runs without it (LockOmplRandomness).
       auto lock = LockOmplRandomness();
       SeedOmpl(request.seed * 0x100000001b3ULL + static_cast<uint64_t>(index));
-      const ob::SpaceInformationPtr si = MakeSpaceInformation(checker, request.resolution);
-      auto pdef = std::make_shared<ob::ProblemDefinition>(si);
+      si = MakeSpaceInformation(checker, request.resolution);
+      // PRM asks for two samplers (a valid-state sampler over a plain one, and a plain one),
+      // the others for one.
+      PrepareSamplers(si, 2);
+      pdef = std::make_shared<ob::ProblemDefinition>(si);
       ob::ScopedState<> s(si), g(si);
       ToOmpl(space, start, s.get());
       ToOmpl(space, goal, g.get());
@@ -140,33 +148,33 @@ PlanResult PlanPaths(const MotionChecker& checker, const PlanRequest& request) {
         // up instead of returning its first solution.
         pdef->setOptimizationObjective(std::make_shared<ob::PathLengthOptimizationObjective>(si));
       }
-      const ob::PlannerPtr planner = MakePlanner(request.planner, si);
+      planner = MakePlanner(request.planner, si);
       planner->setProblemDefinition(pdef);
       planner->setup();
+    }
+    const CancelToken cancel = request.cancel;
+    const ob::PlannerTerminationCondition ptc = ob::plannerOrTerminationCondition(
+        ob::timedPlannerTerminationCondition(request.time_s),
+        ob::PlannerTerminationCondition([cancel] { return cancel.stopped(); }));
+    const auto t0 = std::chrono::steady_clock::now();
+    const ob::PlannerStatus status = planner->solve(ptc);
+    attempt.elapsed_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    attempt.status = status.asString();
+    request.cancel.ThrowIfStopped();
 
-      const CancelToken cancel = request.cancel;
-      const ob::PlannerTerminationCondition ptc = ob::plannerOrTerminationCondition(
-          ob::timedPlannerTerminationCondition(request.time_s),
-          ob::PlannerTerminationCondition([cancel] { return cancel.stopped(); }));
-      const auto t0 = std::chrono::steady_clock::now();
-      const ob::PlannerStatus status = planner->solve(ptc);
-      attempt.elapsed_ms =
-          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-      attempt.status = status.asString();
-      request.cancel.ThrowIfStopped();
-
-      if (pdef->hasExactSolution()) {
-        const auto* solution = pdef->getSolutionPath()->as<og::PathGeometric>();
-        path = FromOmplPath(space, *solution, name);
-        if (request.simplify) {
-          path = ShortcutPath(checker, path,
-                              {.seed = request.seed + static_cast<uint64_t>(index),
-                               .resolution = request.resolution});
-        }
-      } else {
-        attempt.status =
-            "no path in " + FormatSeconds(request.time_s) + " (OMPL: " + attempt.status + ")";
+    if (pdef->hasExactSolution()) {
+      const auto* solution = pdef->getSolutionPath()->as<og::PathGeometric>();
+      path = FromOmplPath(space, *solution, name);
+      if (request.simplify) {
+        // Takes the lock itself, for as long as it draws seeds.
+        path = ShortcutPath(checker, path,
+                            {.seed = request.seed + static_cast<uint64_t>(index),
+                             .resolution = request.resolution});
       }
+    } else {
+      attempt.status =
+          "no path in " + FormatSeconds(request.time_s) + " (OMPL: " + attempt.status + ")";
     }
     if (!path.waypoints.empty()) {
       // Exact endpoints: every input of a merge must share them bit for bit.

@@ -549,3 +549,113 @@ def test_cli_remote_deadline(server, tmp_path):
                    "--timeout", "0.5", "-q")
     # The server did not answer in time: exit 3 (server failed), not 2 (bad input).
     assert late.returncode == 3 and "DEADLINE_EXCEEDED" in late.stderr, late.stderr
+
+
+def test_started_total_counts_a_call_in_flight():
+    """grpc_server_started_total goes up when a call starts, handled_total when it ends: while a
+    merge runs, started exceeds handled by one for MergePaths (on a server of its own, so that no
+    other test's call is in flight)."""
+    server = Server()
+    try:
+        with server.client() as client:
+            client.create_session(client.upload_scene(DATA / "scene.json"))
+            started_total_in_flight(server, client)
+    finally:
+        assert server.stop() == 0, "".join(server.log)
+
+
+def started_total_in_flight(server, client):
+    def counts():
+        return (server.metric("grpc_server_started_total", grpc_method="MergePaths"),
+                server.metric("grpc_server_handled_total", grpc_method="MergePaths"))
+
+    request = service_pb2.MergePathsRequest(
+        session=client.session, paths=hgraph_client.make_paths(densified(40)),
+        options=merge_pb2.MergeOptions(variant=merge_pb2.VARIANT_ALL_PAIRS,
+                                       evaluation=merge_pb2.EVALUATION_EAGER),
+        progress_interval_ms=10)
+    call = client.merge_stream(request, timeout=60)
+    during = None
+    for event in call:
+        if event.HasField("progress"):
+            during = counts()
+            call.cancel()
+            break
+    with pytest.raises(grpc.RpcError):
+        for _ in call:
+            pass
+    assert during is not None
+    started, handled = during
+    assert started == handled + 1, during
+    # Once the cancelled call is finished, the two agree again.
+    for _ in range(400):
+        started, handled = counts()
+        if started == handled:
+            break
+        time.sleep(0.05)
+    assert started == handled
+
+
+def run_server_expecting_refusal(*flags):
+    """Runs hgraph-server with `flags` and returns (exit code, stderr) of a refused start."""
+    proc = subprocess.run([SERVER, "--listen", "127.0.0.1:0", "--metrics-listen", "", *flags],
+                          capture_output=True, text=True, timeout=30)
+    assert "ready" not in proc.stdout, proc.stdout
+    return proc.returncode, proc.stderr
+
+
+def test_max_message_bytes_out_of_int_range_is_refused():
+    # gRPC takes an int: 3 GB would wrap to a negative size if narrowed unchecked.
+    code, err = run_server_expecting_refusal("--max-message-bytes", "3000000000")
+    assert code != 0
+    assert "--max-message-bytes" in err and "2147483647" in err, err
+
+
+def test_mistyped_log_level_is_refused_naming_the_allowed_values():
+    code, err = run_server_expecting_refusal("--log-level", "verbose")
+    assert code != 0
+    assert "--log-level" in err and "verbose" in err, err
+    for level in ("trace", "debug", "info", "warn", "error"):
+        assert level in err, err
+
+
+def test_metrics_listener_error_names_the_flag():
+    import socket
+    taken = socket.socket()
+    taken.bind(("127.0.0.1", 0))
+    taken.listen(1)
+    try:
+        port = taken.getsockname()[1]
+        proc = subprocess.run([SERVER, "--listen", "127.0.0.1:0", "--metrics-listen",
+                               f"127.0.0.1:{port}"], capture_output=True, text=True, timeout=30)
+    finally:
+        taken.close()
+    assert proc.returncode != 0
+    assert "--metrics-listen" in proc.stderr, proc.stderr
+    assert "--metrics-address" not in proc.stderr, proc.stderr
+
+
+def test_merge_whose_session_is_deleted_meanwhile_still_answers(server):
+    """Deleting the session while its merge runs: the merge still answers with its result; the
+    H-Graph is not stored (no name to re-query), and the session stays deleted."""
+    with server.client() as c:
+        c.create_session(c.upload_scene(DATA / "scene.json"))
+        session = c.session
+        deleted = []
+
+        def on_progress(_):
+            if not deleted:
+                with server.client() as other:
+                    other.delete_session(session)
+                deleted.append(True)
+
+        merged = c.merge(densified(40), variant="all-pairs", evaluation="eager",
+                         optimize_ms=0, on_progress=on_progress, progress_interval_ms=10,
+                         timeout=120)
+        assert deleted
+        assert merged.result.quality.length > 0
+        assert len(merged.result.path.waypoints) >= 2
+        assert merged.hgraph == ""
+        with pytest.raises(hgraph_client.HgraphError) as e:
+            server.client().get_session(session)
+        assert e.value.code == grpc.StatusCode.NOT_FOUND

@@ -539,6 +539,14 @@ TEST(AdapterTest, MergeResultToProtoAndJson) {
         "\"invalid_reason\": \"collision\"", "\"total_ms\": 8.5", "\"edges_reused\""}) {
     EXPECT_NE(json.find(key), std::string::npos) << key << "\n" << json;
   }
+
+  // And back: where each merged waypoint came from survives the round trip.
+  const MergeResult back = MergeResultFromProto(proto);
+  EXPECT_EQ(back.source_path, result.source_path);
+  EXPECT_EQ(back.source_index, result.source_index);
+  EXPECT_EQ(back.source_fraction, result.source_fraction);
+  EXPECT_EQ(back.best_input, 0);
+  EXPECT_EQ(back.objective, 1.5);
 }
 
 }  // namespace

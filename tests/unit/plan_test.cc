@@ -4,8 +4,15 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
 #include <cstdio>
+#include <cstdlib>
+#include <future>
+#include <mutex>
 #include <string>
+#include <thread>
 
 #include "core/adapter/scene_proto.h"
 #include "core/collision/collision_world.h"
@@ -255,6 +262,114 @@ TEST_F(PlanTest, ShortcutAndOmplHybridizationKeepPathsValidAndNoLonger) {
 // The built-in scenes load, their queries are valid, and the paper's PRM solves each. PRM stops at
 // its first solution; the budget is generous so that a loaded machine does not fail the test
 // (how fast PRM is belongs to the benchmarks and scenes/README.md, not here).
+// A checker that answers as `inner` does, but holds its first CheckEdge (made inside OMPL's
+// solve(): the endpoints are checked with IsValid) until Open() or a 30 s safety timeout.
+class GatedChecker final : public MotionChecker {
+ public:
+  explicit GatedChecker(const MotionChecker& inner) : inner_(inner) {}
+  const Space& space() const override { return inner_.space(); }
+  EdgeReport CheckEdge(const EdgeCheckRequest& request) const override {
+    std::unique_lock lock(mutex_);
+    if (!entered_) {
+      entered_ = true;
+      changed_.notify_all();
+      changed_.wait_for(lock, std::chrono::seconds(30), [this] { return open_; });
+      held_ = false;
+    }
+    lock.unlock();
+    return inner_.CheckEdge(request);
+  }
+  bool IsValid(const Config& q) const override { return inner_.IsValid(q); }
+  double Clearance(const Config& q) const override { return inner_.Clearance(q); }
+  int64_t total_collision_checks() const override { return inner_.total_collision_checks(); }
+  int64_t total_distance_queries() const override { return inner_.total_distance_queries(); }
+
+  bool WaitEntered() const {
+    std::unique_lock lock(mutex_);
+    return changed_.wait_for(lock, std::chrono::seconds(60), [this] { return entered_; });
+  }
+  // True while the first check is still held.
+  bool Held() const {
+    std::lock_guard lock(mutex_);
+    return held_;
+  }
+  void Open() const {
+    std::lock_guard lock(mutex_);
+    open_ = true;
+    changed_.notify_all();
+  }
+
+ private:
+  const MotionChecker& inner_;
+  mutable std::mutex mutex_;
+  mutable std::condition_variable changed_;
+  mutable bool entered_ = false;
+  mutable bool open_ = false;
+  mutable bool held_ = true;
+};
+
+// While one run is inside OMPL's solve() (held there by its checker), another run plans and
+// returns: the process-wide OMPL lock covers only the construction of each run's objects, not
+// the search (a server's concurrent PlanPaths calls would otherwise queue up on it, each one
+// parking a worker thread).
+TEST_F(PlanTest, ConcurrentRunsSearchInParallel) {
+  const GatedChecker gated(*maze_->planner);
+  PlanRequest held = MazeRequest(*maze_, PlannerType::kRRTConnect, 21);
+  held.count = 1;
+  auto first = std::async(std::launch::async, [&] { return PlanPaths(gated, held); });
+  ASSERT_TRUE(gated.WaitEntered());
+  PlanRequest other = MazeRequest(*maze_, PlannerType::kRRTConnect, 22);
+  other.count = 1;
+  const PlanResult second = PlanPaths(*maze_->planner, other);
+  const bool first_still_held = gated.Held();
+  gated.Open();
+  const PlanResult first_result = first.get();
+  EXPECT_TRUE(first_still_held) << "the second run waited for the first one's search";
+  EXPECT_EQ(second.paths.size(), 1u);
+  EXPECT_EQ(first_result.paths.size(), 1u);
+}
+
+// Seeds stay reproducible when runs overlap: each run's samplers are drawn under the lock.
+TEST_F(PlanTest, SameSeedSamePathsWhenRunsOverlap) {
+  const PlanRequest a = MazeRequest(*maze_, PlannerType::kRRTConnect, 31);
+  const PlanRequest b = MazeRequest(*maze_, PlannerType::kRRT, 32);
+  const PlanResult alone_a = PlanPaths(*maze_->planner, a);
+  const PlanResult alone_b = PlanPaths(*maze_->planner, b);
+  auto together_a = std::async(std::launch::async, [&] { return PlanPaths(*maze_->planner, a); });
+  auto together_b = std::async(std::launch::async, [&] { return PlanPaths(*maze_->planner, b); });
+  const PlanResult ra = together_a.get();
+  const PlanResult rb = together_b.get();
+  ASSERT_EQ(ra.paths.size(), alone_a.paths.size());
+  ASSERT_EQ(rb.paths.size(), alone_b.paths.size());
+  for (size_t i = 0; i < ra.paths.size(); ++i) {
+    EXPECT_EQ(ra.paths[i].waypoints, alone_a.paths[i].waypoints) << i;
+  }
+  for (size_t i = 0; i < rb.paths.size(); ++i) {
+    EXPECT_EQ(rb.paths[i].waypoints, alone_b.paths[i].waypoints) << i;
+  }
+}
+
+// `simplify` shortcuts each path (ShortcutPath takes the OMPL lock itself: the planning loop
+// must not hold it then).
+TEST_F(PlanTest, SimplifiedPathsAreReturnedValidAndNoLonger) {
+  PlanRequest request = MazeRequest(*maze_, PlannerType::kRRTConnect, 41);
+  request.count = 1;
+  PlanRequest simplified = request;
+  simplified.simplify = true;
+  auto run = std::async(std::launch::async, [&] { return PlanPaths(*maze_->planner, simplified); });
+  if (run.wait_for(std::chrono::seconds(120)) != std::future_status::ready) {
+    ADD_FAILURE() << "PlanPaths with simplify did not return (deadlock)";
+    std::_Exit(1);
+  }
+  const PlanResult plain = PlanPaths(*maze_->planner, request);
+  const PlanResult shortcut = run.get();
+  ASSERT_EQ(plain.paths.size(), 1u);
+  ASSERT_EQ(shortcut.paths.size(), 1u);
+  ExpectValid(*maze_->planner, shortcut.paths[0]);
+  EXPECT_LE(Length(maze_->scene->space, shortcut.paths[0]),
+            Length(maze_->scene->space, plain.paths[0]) + 1e-9);
+}
+
 TEST(BuiltInScenesTest, PRMSolvesEveryScene) {
   for (const std::string name : {"maze", "grid", "wrench", "double_wrench", "circles"}) {
     SCOPED_TRACE(name);
