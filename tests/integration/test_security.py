@@ -220,8 +220,22 @@ def tenant(server, pki, token, **kwargs):
     return hgraph_client.Client(server.target, tls_ca=pki / "ca.pem", token=token, **kwargs)
 
 
-def test_calls_without_a_valid_token_are_unauthenticated(token_server, pki):
-    with tenant(token_server, pki, None, retries=0) as anonymous:
+def test_python_client_takes_the_token_from_the_environment(token_server, pki, monkeypatch):
+    monkeypatch.setenv("HGRAPH_TOKEN", TOKEN_B)
+    with tenant(token_server, pki, None) as from_env, tenant(token_server, pki, TOKEN_A) as a:
+        name = a.create_session(a.upload_scene(DATA / "scene.json")).name
+        expect_code(grpc.StatusCode.PERMISSION_DENIED, lambda: from_env.get_session(name))
+        assert a.get_session(name).name == name  # the argument wins over the variable
+        a.delete_session(name)
+    with pytest.raises(ValueError, match="token: must be visible ASCII"):
+        hgraph_client.Client("127.0.0.1:1", token="two words")
+    with pytest.raises(ValueError, match="tls_cert and tls_key go together"):
+        hgraph_client.Client("127.0.0.1:1", tls_cert=pki / "client.pem")
+
+
+def test_calls_without_a_valid_token_are_unauthenticated(token_server, pki, monkeypatch):
+    monkeypatch.delenv("HGRAPH_TOKEN", raising=False)
+    with tenant(token_server, pki, "", retries=0) as anonymous:
         missing = expect_code(grpc.StatusCode.UNAUTHENTICATED, anonymous.list_sessions)
         assert "no authorization metadata" in missing.message
         assert "Bearer" in missing.message

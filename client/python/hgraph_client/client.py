@@ -182,7 +182,7 @@ class Client:
     `tls_cert` and `tls_key` are the client certificate and its key for a server that requires
     mutual TLS (--tls-client-ca). `token` (default: $HGRAPH_TOKEN) goes with every call as
     `authorization: Bearer <token>` for a server with --auth-tokens; sessions then belong to the
-    token's tenant. Over plaintext the token travels in the clear: use it with TLS (or on
+    token's tenant (token="" sends none, whatever the environment says). Over plaintext the token travels in the clear: use it with TLS (or on
     loopback).
     """
 
@@ -205,9 +205,10 @@ class Client:
             self.channel = grpc.secure_channel(target, credentials, options=options)
         else:
             self.channel = grpc.insecure_channel(target, options=options)
+        # None: from the environment; "" sends no token even when the variable is set.
         if token is None:
-            token = os.environ.get(TOKEN_ENV) or None
-        if token is not None and (not token or any(c <= " " or c > "~" for c in token)):
+            token = os.environ.get(TOKEN_ENV, "")
+        if any(c <= " " or c > "~" for c in token):
             raise ValueError("token: must be visible ASCII characters without blanks")
         self._auth = (("authorization", "Bearer " + token),) if token else ()
         self.stub = service_pb2_grpc.PathMergerStub(self.channel)
