@@ -212,27 +212,27 @@ void HybridizationSession::CheckEdges(const std::vector<int>& edge_ids, bool nee
   const ProgressReporter reporter(progress, phase, total, *checker_, Clock::now());
   std::atomic<int64_t> done{0};
   RunWithThreads(ResolveThreads(options_.threads), [&] {
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, edge_ids.size(), 1),
-                      [&](const tbb::blocked_range<size_t>& range) {
-                        for (size_t k = range.begin(); k != range.end(); ++k) {
-                          if (cancel.stopped()) return;
-                          HEdge& edge = graph_.mutable_edge(edge_ids[k]);
-                          const EdgeReport previous = std::move(edge.report);
-                          edge.report = checker_->CheckEdge(
-                              EdgeCheckRequest{.from = &graph_.node(edge.u).q,
-                                               .to = &graph_.node(edge.v).q,
-                                               .mode = !(need_clearance || edge.input) ? EdgeCheckMode::kSampled
-                                                       : previous.state == EdgeState::kValid
-                                                           ? EdgeCheckMode::kClearanceOfValid
-                                                           : EdgeCheckMode::kClearance});
-                          // A re-check for clearance keeps counting what the first check cost.
-                          if (previous.state != EdgeState::kUnchecked) {
-                            edge.report.collision_checks += previous.collision_checks;
-                            edge.report.distance_queries += previous.distance_queries;
-                          }
-                          reporter.Done(done.fetch_add(1, std::memory_order_relaxed) + 1);
-                        }
-                      });
+    tbb::parallel_for(
+        tbb::blocked_range<size_t>(0, edge_ids.size(), 1),
+        [&](const tbb::blocked_range<size_t>& range) {
+          for (size_t k = range.begin(); k != range.end(); ++k) {
+            if (cancel.stopped()) return;
+            HEdge& edge = graph_.mutable_edge(edge_ids[k]);
+            const EdgeReport previous = std::move(edge.report);
+            edge.report = checker_->CheckEdge(EdgeCheckRequest{
+                .from = &graph_.node(edge.u).q,
+                .to = &graph_.node(edge.v).q,
+                .mode = !(need_clearance || edge.input)       ? EdgeCheckMode::kSampled
+                        : previous.state == EdgeState::kValid ? EdgeCheckMode::kClearanceOfValid
+                                                              : EdgeCheckMode::kClearance});
+            // A re-check for clearance keeps counting what the first check cost.
+            if (previous.state != EdgeState::kUnchecked) {
+              edge.report.collision_checks += previous.collision_checks;
+              edge.report.distance_queries += previous.distance_queries;
+            }
+            reporter.Done(done.fetch_add(1, std::memory_order_relaxed) + 1);
+          }
+        });
   });
   cancel.ThrowIfStopped();
   *checked += total;
@@ -351,12 +351,12 @@ SearchResult HybridizationSession::SearchBest(const Measure& measure, bool profi
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const ExactFn exact = [&](int e) {
     const EdgeReport& report = graph_.edge(e).report;
-    return report.state == EdgeState::kInvalid ||
+    return !report.usable() ||
            (report.state == EdgeState::kValid && (!needs_clearance || report.has_clearance));
   };
   const SearchEdgeFn see = [&](int e) {
     const EdgeReport& report = graph_.edge(e).report;
-    if (report.state == EdgeState::kInvalid) {
+    if (!report.usable()) {
       return SearchEdge{.value = nan, .length = edge_length_[e]};
     }
     if (exact(e)) return SearchEdge{.value = measure.EdgeValue(report), .length = edge_length_[e]};
@@ -396,9 +396,10 @@ SearchResult HybridizationSession::SearchBest(const Measure& measure, bool profi
             ErrorCode::kFailedPrecondition, "measure.safety",
             "no path in the H-Graph keeps clearance >= " + std::to_string(measure.spec().safety));
       }
-      throw Error(ErrorCode::kFailedPrecondition, "paths",
-                  "the valid edges of the H-Graph do not connect start and goal (are the "
-                  "inputs valid?)");
+      throw Error(
+          ErrorCode::kFailedPrecondition, "paths",
+          "the valid, certified edges of the H-Graph do not connect start and goal (are the "
+          "inputs valid?)");
     }
     if (!profile) return best;
     phase = Clock::now();
@@ -410,7 +411,8 @@ SearchResult HybridizationSession::SearchBest(const Measure& measure, bool profi
     result->timing.evaluate_ms += MsSince(phase);
     bool still_valid = true;
     for (int e : output_recheck) {
-      still_valid = still_valid && graph_.edge(e).report.state == EdgeState::kValid;
+      const EdgeReport& report = graph_.edge(e).report;
+      still_valid = still_valid && report.state == EdgeState::kValid && report.usable();
     }
     if (still_valid) return best;
   }

@@ -35,6 +35,11 @@ struct EdgeReport {
   bool certified = false;
   int64_t collision_checks = 0;
   int64_t distance_queries = 0;
+
+  // Whether a path may use the motion: not found invalid, and not profiled without a certificate
+  // (a motion that grazes an obstacle closer than the finest refinement can prove free is
+  // refused, so that every merged path is certified).
+  bool usable() const { return state != EdgeState::kInvalid && !(has_clearance && !certified); }
 };
 
 // Default local-planner resolution: the longest step between two checked samples as a fraction

@@ -255,7 +255,7 @@ SearchResult FindBestPath(const HGraph& graph, const MeasureSpec& spec) {
   const auto measure = Measure::Make(spec);
   const auto edge = [&](int e) {
     const EdgeReport& report = graph.edge(e).report;
-    if (report.state != EdgeState::kValid ||
+    if (report.state != EdgeState::kValid || !report.usable() ||
         (measure->needs_clearance() && !report.has_clearance)) {
       return SearchEdge{.value = std::numeric_limits<double>::quiet_NaN(), .length = report.length};
     }

@@ -8,6 +8,8 @@
 #include <cmath>
 #include <random>
 
+#include "core/adapter/path_io.h"
+#include "core/adapter/scene_proto.h"
 #include "core/collision/collision_world.h"
 #include "core/common/error.h"
 #include "core/merge/path_check.h"
@@ -141,6 +143,9 @@ TEST_P(MergePropertyTest, EveryVariantAndMeasureKeepsTheInvariants) {
       }
       for (const MergeResult& r : runs) {
         ExpectValid(planner, r.path);
+        // Certified as `hgraph check` certifies: every stretch proven free.
+        const InputReport check = CheckPaths(planner, {.paths = {r.path}}).paths.at(0);
+        EXPECT_TRUE(check.valid && check.certified);
         EXPECT_TRUE(r.path.waypoints.front().isApprox(inputs[0].waypoints.front()));
         EXPECT_TRUE(r.path.waypoints.back().isApprox(inputs[0].waypoints.back()));
         EXPECT_TRUE(r.quality.has_clearance);
@@ -193,6 +198,31 @@ TEST_P(MergePropertyTest, EveryVariantAndMeasureKeepsTheInvariants) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Seeds, MergePropertyTest, ::testing::Values(1, 2, 3));
+
+// Four PRM paths on the grid scene (hgraph-bench, seed 1) whose shortcuts and bridges graze
+// obstacles: sampled-valid motions the clearance profile cannot certify. The merge used to return
+// one of them; every mode must now route around them and return a certified path.
+TEST(MergeCertifiedTest, GrazingMotionsNeverReachTheOutput) {
+  const auto scene = LoadSceneFile(std::string(HGRAPH_SOURCE_DIR) + "/scenes/grid/scene.json");
+  const LocalPlanner planner(std::make_shared<CollisionWorld>(scene),
+                             LocalPlannerOptions{.resolution = 0.002});
+  const std::vector<InputPath> inputs =
+      LoadPathsFile(std::string(HGRAPH_TEST_DATA_DIR) + "/grid/prm4_seed1.json", planner.space());
+  ASSERT_EQ(inputs.size(), 4u);
+  double shortest_input = INFINITY;
+  for (const InputReport& input : CheckPaths(planner, {.paths = inputs}).paths) {
+    shortest_input = std::min(shortest_input, input.quality.length);
+  }
+  for (const MergeOptions& options :
+       {MergeOptions{}, MergeOptions{.evaluation = Evaluation::kEager},
+        MergeOptions{.candidates = {.variant = Variant::kAllPairs}}}) {
+    const MergeResult r = Merge(planner, MergeRequest{.paths = inputs, .options = options});
+    const InputReport check = CheckPaths(planner, {.paths = {r.path}}).paths.at(0);
+    EXPECT_TRUE(check.valid);
+    EXPECT_TRUE(check.certified) << "min clearance " << check.quality.min_clearance;
+    EXPECT_LT(r.quality.length, shortest_input);
+  }
+}
 
 TEST_F(MergeTest, RequeryReusesEveryCheck) {
   const LocalPlanner planner = MakePlanner();

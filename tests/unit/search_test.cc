@@ -16,12 +16,13 @@ Space Plane() { return Space::RealVector(Eigen::Vector2d(0, 0), Eigen::Vector2d(
 
 Config P(double x, double y) { return Eigen::Vector2d(x, y); }
 
-// Fills a valid report for an edge with a clearance profile of `samples` points.
+// Fills a valid, certified report for an edge with a clearance profile of `samples` points.
 void SetReport(HGraph& graph, const Space& space, int e, std::vector<double> clearances) {
   HEdge& edge = graph.mutable_edge(e);
   edge.report.state = EdgeState::kValid;
   edge.report.length = space.Distance(graph.node(edge.u).q, graph.node(edge.v).q);
   edge.report.has_clearance = true;
+  edge.report.certified = true;
   edge.report.profile.clear();
   for (size_t s = 0; s < clearances.size(); ++s) {
     edge.report.profile.push_back(
@@ -121,6 +122,21 @@ TEST(SearchTest, InvalidEdgesAreNeverUsed) {
   const SearchResult r = FindBestPath(graph, MeasureSpec{});
   ASSERT_TRUE(r.found);
   EXPECT_EQ(r.nodes.size(), 3u);
+}
+
+TEST(SearchTest, ProfiledEdgesWithoutACertificateAreNeverUsed) {
+  const Space space = Plane();
+  HGraph graph(space, {InputPath{.waypoints = {P(0, 0), P(5, 5), P(10, 10)}}}, 0);
+  const int shortcut = graph.AddEdge(graph.start(), graph.goal(), false);
+  for (int e = 0; e < graph.num_edges(); ++e) SetReport(graph, space, e, {1, 1});
+  graph.mutable_edge(shortcut).report.certified = false;  // valid at its samples only
+  for (const MeasureType type : {MeasureType::kLength, MeasureType::kBottleneckClearance}) {
+    const SearchResult r = FindBestPath(graph, MeasureSpec{.type = type});
+    ASSERT_TRUE(r.found);
+    EXPECT_EQ(r.nodes.size(), 3u);
+  }
+  graph.mutable_edge(graph.path_edges(0)[0]).report.certified = false;
+  EXPECT_FALSE(FindBestPath(graph, MeasureSpec{}).found);
 }
 
 TEST(SearchTest, SafeLengthTakesTheLongerSaferRoute) {
