@@ -51,6 +51,7 @@ struct Flags {
   double mesh_import_timeout_s = 30;
   hgraph::server::TlsFiles tls;
   std::string auth_tokens;
+  double upload_idle_timeout_s = 30;
 };
 
 }  // namespace
@@ -136,6 +137,11 @@ int main(int argc, char** argv) {
                  "file of \"TOKEN TENANT\" lines: every call needs \"authorization: Bearer "
                  "TOKEN\"; sessions and H-Graphs belong to the token's tenant (health stays open)")
       ->check(CLI::ExistingFile);
+  app.add_option("--upload-idle-timeout-s", flags.upload_idle_timeout_s,
+                 "an UploadBlob stream that sends nothing for this long is aborted (ABORTED) and "
+                 "its reserved bytes and admission slot released")
+      ->check(CLI::Range(0.5, 86400.0))
+      ->capture_default_str();
   app.add_option("--log-level", flags.log_level, "log verbosity")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}))
       ->capture_default_str();
@@ -170,7 +176,9 @@ int main(int argc, char** argv) {
                       .memory_mb = flags.mesh_import_memory_mb,
                       .cpu_s = flags.mesh_import_cpu_s,
                       .timeout = std::chrono::milliseconds(
-                          static_cast<int64_t>(flags.mesh_import_timeout_s * 1e3))}};
+                          static_cast<int64_t>(flags.mesh_import_timeout_s * 1e3))},
+      .upload_idle_timeout =
+          std::chrono::milliseconds(static_cast<int64_t>(flags.upload_idle_timeout_s * 1e3))};
 
   try {
     hgraph::server::MeshImporter(options.mesh_import).CheckHelper();
@@ -224,12 +232,15 @@ int main(int argc, char** argv) {
     std::printf("hgraph-server ready grpc_port=%d metrics_port=%d\n", port, metrics_port);
     std::fflush(stdout);
 
-    // The main thread waits for a signal and expires idle sessions once a second.
+    // The main thread waits for a signal and expires idle sessions and uploads once a second.
     const timespec tick{.tv_sec = 1, .tv_nsec = 0};
     int signal = -1;
     while (signal < 0) {
       signal = sigtimedwait(&signals, nullptr, &tick);
-      if (signal < 0) service.ExpireIdleSessions();
+      if (signal < 0) {
+        service.ExpireIdleSessions();
+        service.ExpireIdleUploads();
+      }
     }
     spdlog::info("received signal {}: draining for {} s, then shutting down (grace {} s)", signal,
                  flags.drain_s, flags.grace_s);

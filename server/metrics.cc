@@ -165,7 +165,9 @@ ServiceMetrics::ServiceMetrics(Metrics& registry)
                                   "Scene lookups that had to load meshes and build BVHs.")),
       scene_loads(
           registry.DeclareCounter("hgraph_scene_loads_total", "Scenes loaded and BVH-built.")),
-      cache_bytes(registry.DeclareGauge("hgraph_cache_bytes", "Bytes held in the cache, by kind.")),
+      cache_bytes(registry.DeclareGauge(
+          "hgraph_cache_bytes",
+          "Bytes held in the cache, by kind (upload: reserved by unfinished uploads).")),
       cache_budget_bytes(registry.DeclareGauge("hgraph_cache_budget_bytes",
                                                "The cache's budget (--cache-bytes).")),
       cache_evictions(registry.DeclareCounter("hgraph_cache_evictions_total",

@@ -1,5 +1,6 @@
 #include "server/resource_cache.h"
 
+#include <algorithm>
 #include <utility>
 #include <vector>
 
@@ -60,22 +61,54 @@ bool ResourceCache::Put(CacheKind kind, const std::string& key, std::shared_ptr<
     index_[full] = lru_.begin();
     bytes_ += bytes;
     kind_bytes_[static_cast<int>(kind)] += bytes;
-    while (bytes_ > budget_bytes_ && lru_.size() > 1) {
-      Entry& victim = lru_.back();
-      bytes_ -= victim.bytes;
-      kind_bytes_[static_cast<int>(victim.kind)] -= victim.bytes;
-      ++evictions_[static_cast<int>(victim.kind)];
-      evicted.emplace_back(victim.kind, victim.key.substr(victim.key.find(':') + 1));
-      dropped.push_back(std::move(victim.value));
-      index_.erase(victim.key);
-      lru_.pop_back();
-    }
+    EvictToFit(1, &evicted, &dropped);
     listener = listener_;
   }
   if (listener) {
     for (const auto& [victim_kind, victim_key] : evicted) listener(victim_kind, victim_key);
   }
   return true;
+}
+
+void ResourceCache::EvictToFit(size_t keep, std::vector<std::pair<CacheKind, std::string>>* evicted,
+                               std::vector<std::shared_ptr<const void>>* dropped) {
+  while (bytes_ + reserved_ > budget_bytes_ && lru_.size() > keep) {
+    Entry& victim = lru_.back();
+    bytes_ -= victim.bytes;
+    kind_bytes_[static_cast<int>(victim.kind)] -= victim.bytes;
+    ++evictions_[static_cast<int>(victim.kind)];
+    evicted->emplace_back(victim.kind, victim.key.substr(victim.key.find(':') + 1));
+    dropped->push_back(std::move(victim.value));
+    index_.erase(victim.key);
+    lru_.pop_back();
+  }
+}
+
+bool ResourceCache::Reserve(size_t bytes) {
+  std::vector<std::pair<CacheKind, std::string>> evicted;
+  std::vector<std::shared_ptr<const void>> dropped;
+  EvictionListener listener;
+  {
+    std::lock_guard lock(mutex_);
+    if (bytes > budget_bytes_ - reserved_) return false;
+    reserved_ += bytes;
+    EvictToFit(0, &evicted, &dropped);
+    listener = listener_;
+  }
+  if (listener) {
+    for (const auto& [kind, key] : evicted) listener(kind, key);
+  }
+  return true;
+}
+
+void ResourceCache::Unreserve(size_t bytes) {
+  std::lock_guard lock(mutex_);
+  reserved_ -= std::min(bytes, reserved_);
+}
+
+size_t ResourceCache::reserved_bytes() const {
+  std::lock_guard lock(mutex_);
+  return reserved_;
 }
 
 void ResourceCache::Erase(CacheKind kind, const std::string& key) {

@@ -15,6 +15,8 @@
 #include <mutex>
 #include <string>
 #include <unordered_map>
+#include <utility>
+#include <vector>
 
 namespace hgraph::server {
 
@@ -48,6 +50,13 @@ class ResourceCache {
   bool Put(CacheKind kind, const std::string& key, std::shared_ptr<const void> value, size_t bytes);
   void Erase(CacheKind kind, const std::string& key);
 
+  // Bytes held outside the cache that count against its budget (unfinished uploads): reserving
+  // evicts least recently used entries to make room. Returns false, reserving nothing, if the
+  // reservations would exceed the budget by themselves.
+  bool Reserve(size_t bytes);
+  void Unreserve(size_t bytes);
+  size_t reserved_bytes() const;
+
   size_t bytes() const;
   size_t bytes(CacheKind kind) const;
   size_t budget_bytes() const { return budget_bytes_; }
@@ -61,6 +70,10 @@ class ResourceCache {
     size_t bytes = 0;
   };
   static std::string FullKey(CacheKind kind, const std::string& key);
+  // Evicts from the back until entries and reservations fit the budget, keeping at least `keep`
+  // entries; the caller holds mutex_ and calls the listener for `evicted` after releasing it.
+  void EvictToFit(size_t keep, std::vector<std::pair<CacheKind, std::string>>* evicted,
+                  std::vector<std::shared_ptr<const void>>* dropped);
   std::shared_ptr<const void> GetErased(CacheKind kind, const std::string& key);
 
   const size_t budget_bytes_;
@@ -68,6 +81,7 @@ class ResourceCache {
   std::list<Entry> lru_;  // front = most recently used
   std::unordered_map<std::string, std::list<Entry>::iterator> index_;
   size_t bytes_ = 0;
+  size_t reserved_ = 0;
   size_t kind_bytes_[4] = {0, 0, 0, 0};
   int64_t evictions_[4] = {0, 0, 0, 0};
   EvictionListener listener_;

@@ -27,6 +27,7 @@ PathMergerService::PathMergerService(const ServerOptions& options, Metrics& metr
       families_.cache_bytes.Set(labels, static_cast<double>(cache_.bytes(kind)));
       families_.cache_evictions.Set(labels, static_cast<double>(cache_.evictions(kind)));
     }
+    families_.cache_bytes.Set({{"kind", "upload"}}, static_cast<double>(cache_.reserved_bytes()));
     families_.cache_budget_bytes.Set({}, static_cast<double>(cache_.budget_bytes()));
     families_.sessions.Set({}, sessions_.size());
     families_.admitted_calls.Set({}, pool_.admitted());

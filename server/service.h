@@ -7,6 +7,8 @@
 #include <chrono>
 #include <cstdint>
 #include <memory>
+#include <mutex>
+#include <set>
 #include <string>
 
 #include "hgraph/v1/service.grpc.pb.h"
@@ -33,6 +35,8 @@ struct ServerOptions {
   int progress_interval_ms = 100;
   MeshImportLimits mesh_import;  // how client mesh bytes are parsed (out of process)
   Authenticator auth;            // --auth-tokens: who a call comes from (open without it)
+  // An UploadBlob stream that sends nothing for this long is aborted (ExpireIdleUploads).
+  std::chrono::milliseconds upload_idle_timeout{std::chrono::seconds(30)};
 };
 
 // Thread safe. Not copyable or movable (reactors point into it).
@@ -74,6 +78,9 @@ class PathMergerService final : public v1::PathMerger::CallbackService {
 
   // Drops sessions idle past their time-to-live and their H-Graphs; called periodically.
   void ExpireIdleSessions();
+  // Aborts UploadBlob streams idle past options().upload_idle_timeout (ABORTED), releasing
+  // their reserved bytes and admission slots; called periodically.
+  void ExpireIdleUploads();
   // Waits for every admitted job (after the gRPC server has shut down).
   void WaitIdle() { pool_.WaitIdle(); }
 
@@ -95,6 +102,8 @@ class PathMergerService final : public v1::PathMerger::CallbackService {
   // Counts the call as started (grpc_server_started_total) and returns its start time.
   std::chrono::steady_clock::time_point RecordStart(const std::string& method);
   void DropHGraphs(const std::vector<std::string>& names);
+  void AddUpload(UploadCall* call);
+  void RemoveUpload(UploadCall* call);
   void RecordMerge(const std::string& method, const v1::MergeResult& result);
 
   ServerOptions options_;
@@ -104,6 +113,8 @@ class PathMergerService final : public v1::PathMerger::CallbackService {
   SceneStore scenes_;
   SessionRegistry sessions_;
   WorkerPool pool_;
+  std::mutex uploads_mutex_;
+  std::set<UploadCall*> uploads_;  // unfinished UploadBlob streams
 };
 
 }  // namespace hgraph::server

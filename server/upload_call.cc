@@ -1,13 +1,22 @@
+// UploadBlob: a client stream of chunks. An unfinished upload holds what a finished blob would:
+// its declared size is reserved in the cache's budget (--cache-bytes) from its first message,
+// it takes an admission slot of the worker pool (--max-pending) from its start, and a stream
+// that sends nothing for --upload-idle-timeout-s is aborted and its bytes released.
+#include <spdlog/spdlog.h>
+
+#include <atomic>
+#include <mutex>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "server/call_support.h"
 #include "server/service.h"
 
 namespace hgraph::server {
 
-// UploadBlob: collects the chunks on gRPC threads (copies only), then verifies the size and
-// SHA-256 on the worker pool.
+// Collects the chunks on gRPC threads (copies only), then verifies the size and SHA-256 on the
+// worker pool.
 class PathMergerService::UploadCall final : public grpc::ServerReadReactor<v1::UploadBlobRequest> {
  public:
   UploadCall(PathMergerService* service, grpc::CallbackServerContext* context,
@@ -19,47 +28,94 @@ class PathMergerService::UploadCall final : public grpc::ServerReadReactor<v1::U
       Complete(auth);
       return;
     }
+    if (!service_->pool().TryHold()) {
+      Complete(Busy(service_->pool()));
+      return;
+    }
+    holds_slot_ = true;
+    service_->AddUpload(this);
+    registered_ = true;
     StartRead(&chunk_);
   }
 
   void OnReadDone(bool ok) override {
-    if (!ok) {
-      EndOfStream();
-      return;
-    }
+    std::lock_guard lock(mutex_);
+    if (finished_) return;
+    Touch();
+    if (!ok) return EndOfStream();
     if (first_) {
       first_ = false;
       digest_ = chunk_.digest();
       grpc::Status status = Invoke([&] { ValidateDigest(digest_, "digest"); }, token_);
-      if (!status.ok()) return Complete(status);
+      if (!status.ok()) return CompleteLocked(status);
       if (digest_.size_bytes() > service_->options().max_blob_bytes) {
-        return Complete(grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
-                                     "digest.size_bytes: " + std::to_string(digest_.size_bytes()) +
-                                         " bytes exceed the limit of " +
-                                         std::to_string(service_->options().max_blob_bytes) +
-                                         " (--max-blob-bytes)"));
+        return CompleteLocked(grpc::Status(
+            grpc::StatusCode::RESOURCE_EXHAUSTED,
+            "digest.size_bytes: " + std::to_string(digest_.size_bytes()) +
+                " bytes exceed the limit of " + std::to_string(service_->options().max_blob_bytes) +
+                " (--max-blob-bytes)"));
       }
-      bytes_.reserve(static_cast<size_t>(digest_.size_bytes()));
+      const size_t declared = static_cast<size_t>(digest_.size_bytes());
+      if (!service_->cache_.Reserve(declared)) {
+        return CompleteLocked(
+            grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                         "digest.size_bytes: " + std::to_string(declared) +
+                             " bytes do not fit in the server's cache budget now (--cache-bytes=" +
+                             std::to_string(service_->cache_.budget_bytes()) + ", of which " +
+                             std::to_string(service_->cache_.reserved_bytes()) +
+                             " are reserved by unfinished uploads); retry later"));
+      }
+      reserved_ = declared;
+      bytes_.reserve(declared);
     }
     if (static_cast<int64_t>(bytes_.size() + chunk_.data().size()) > digest_.size_bytes()) {
-      return Complete(grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
-                                   "data: the chunks hold more than digest.size_bytes = " +
-                                       std::to_string(digest_.size_bytes()) + " bytes"));
+      return CompleteLocked(grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
+                                         "data: the chunks hold more than digest.size_bytes = " +
+                                             std::to_string(digest_.size_bytes()) + " bytes"));
     }
     bytes_ += chunk_.data();
     StartRead(&chunk_);
   }
 
   void OnCancel() override { token_.Cancel(); }
-  void OnDone() override { delete this; }
+  void OnDone() override {
+    if (registered_) service_->RemoveUpload(this);
+    {
+      std::lock_guard lock(mutex_);
+      ReleaseHoldsLocked();
+    }
+    delete this;
+  }
+
+  // Called by ExpireIdleUploads, under its lock (which keeps the call alive).
+  bool IdleSince(Clock::time_point cutoff) const {
+    return !working_.load() && Clock::time_point(Clock::duration(last_activity_.load())) < cutoff;
+  }
+  void Expire(std::chrono::milliseconds timeout) {
+    Complete(grpc::Status(grpc::StatusCode::ABORTED,
+                          "UploadBlob: no data for " + std::to_string(timeout.count() / 1000) +
+                              " s (--upload-idle-timeout-s); the upload was aborted and its " +
+                              "bytes released"));
+  }
 
  private:
+  void Touch() { last_activity_.store(Clock::now().time_since_epoch().count()); }
+
+  // Under mutex_.
   void EndOfStream() {
     if (first_) {
-      return Complete(
+      return CompleteLocked(
           grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, "digest: the stream held no message"));
     }
-    const bool admitted = service_->pool().TrySubmit([this](WorkerPool::Slot& slot) {
+    working_.store(true);
+    // The slot held since the start becomes the verification job's.
+    holds_slot_ = false;
+    service_->pool().SubmitHeld([this](WorkerPool::Slot& slot) {
+      {
+        // From here on the blob counts against the budget as what it becomes, a cache entry.
+        std::lock_guard lock(mutex_);
+        ReleaseReservationLocked();
+      }
       const grpc::Status status = Invoke(
           [&] {
             response_->set_stored(service_->scenes_.PutBlob(digest_, std::move(bytes_)));
@@ -69,20 +125,46 @@ class PathMergerService::UploadCall final : public grpc::ServerReadReactor<v1::U
       slot.Release();
       Complete(status);
     });
-    if (!admitted) Complete(Busy(service_->pool()));
+  }
+
+  void ReleaseReservationLocked() {
+    const size_t reserved = std::exchange(reserved_, 0);
+    if (reserved > 0) service_->cache_.Unreserve(reserved);
+  }
+  void ReleaseHoldsLocked() {
+    ReleaseReservationLocked();
+    if (std::exchange(holds_slot_, false)) service_->pool().Unhold();
   }
 
   void Complete(const grpc::Status& status) {
+    std::lock_guard lock(mutex_);
+    CompleteLocked(status);
+  }
+  // Finishes the call once: a read, the verification job and the idle reaper may each try.
+  void CompleteLocked(const grpc::Status& status) {
+    if (finished_) return;
+    finished_ = true;
+    token_.Cancel();
+    ReleaseHoldsLocked();
     service_->RecordCall("UploadBlob", "", started_, status);
     Finish(status);
   }
 
   PathMergerService* service_;
   v1::UploadBlobResponse* response_;
+  // Guards everything below but the atomics: reads, the verification job and the reaper run on
+  // different threads.
+  std::mutex mutex_;
   v1::UploadBlobRequest chunk_;
   v1::Digest digest_;
   std::string bytes_;
   bool first_ = true;
+  bool registered_ = false;
+  bool finished_ = false;
+  bool holds_slot_ = false;
+  size_t reserved_ = 0;
+  std::atomic<bool> working_{false};
+  std::atomic<Clock::rep> last_activity_{Clock::now().time_since_epoch().count()};
   Clock::time_point started_ = service_->RecordStart("UploadBlob");
   CancelToken token_;
 };
@@ -90,6 +172,30 @@ class PathMergerService::UploadCall final : public grpc::ServerReadReactor<v1::U
 grpc::ServerReadReactor<v1::UploadBlobRequest>* PathMergerService::UploadBlob(
     grpc::CallbackServerContext* context, v1::UploadBlobResponse* response) {
   return new UploadCall(this, context, response);
+}
+
+void PathMergerService::AddUpload(UploadCall* call) {
+  std::lock_guard lock(uploads_mutex_);
+  uploads_.insert(call);
+}
+
+void PathMergerService::RemoveUpload(UploadCall* call) {
+  std::lock_guard lock(uploads_mutex_);
+  uploads_.erase(call);
+}
+
+void PathMergerService::ExpireIdleUploads() {
+  const std::chrono::milliseconds timeout = options_.upload_idle_timeout;
+  const Clock::time_point cutoff = Clock::now() - timeout;
+  // A call's OnDone (on a gRPC thread, after its Finish) waits here until the reaper is done
+  // with it.
+  std::lock_guard lock(uploads_mutex_);
+  std::vector<UploadCall*> idle;
+  for (UploadCall* call : uploads_) {
+    if (call->IdleSince(cutoff)) idle.push_back(call);
+  }
+  for (UploadCall* call : idle) call->Expire(timeout);
+  if (!idle.empty()) spdlog::info("aborted {} idle uploads", idle.size());
 }
 
 }  // namespace hgraph::server

@@ -23,11 +23,23 @@ void WorkerPool::Slot::Release() {
   pool_->admitted_.fetch_sub(1);
 }
 
-bool WorkerPool::TrySubmit(std::function<void(Slot&)> job) {
+bool WorkerPool::TryHold() {
   int current = admitted_.load();
   do {
     if (current >= max_admitted_) return false;
   } while (!admitted_.compare_exchange_weak(current, current + 1));
+  return true;
+}
+
+void WorkerPool::Unhold() { admitted_.fetch_sub(1); }
+
+bool WorkerPool::TrySubmit(std::function<void(Slot&)> job) {
+  if (!TryHold()) return false;
+  SubmitHeld(std::move(job));
+  return true;
+}
+
+void WorkerPool::SubmitHeld(std::function<void(Slot&)> job) {
   running_.fetch_add(1);
   arena_.enqueue([this, job = std::move(job)] {
     Slot slot(this);
@@ -38,7 +50,6 @@ bool WorkerPool::TrySubmit(std::function<void(Slot&)> job) {
       idle_.notify_all();
     }
   });
-  return true;
 }
 
 void WorkerPool::WaitIdle() {

@@ -41,6 +41,12 @@ class WorkerPool {
   // Queues the job, or returns false without running it when the admission queue is full (the
   // caller answers RESOURCE_EXHAUSTED). The job must not throw.
   bool TrySubmit(std::function<void(Slot&)> job);
+  // An admission slot held without a job yet (an upload waiting for its chunks): it counts
+  // against max_admitted like a job's. Returns false when the queue is full.
+  bool TryHold();
+  void Unhold();
+  // Queues a job on a slot taken with TryHold; the job's Slot releases it.
+  void SubmitHeld(std::function<void(Slot&)> job);
   // Blocks until every admitted job has returned.
   void WaitIdle();
 

@@ -659,3 +659,105 @@ def test_merge_whose_session_is_deleted_meanwhile_still_answers(server):
         with pytest.raises(hgraph_client.HgraphError) as e:
             server.client().get_session(session)
         assert e.value.code == grpc.StatusCode.NOT_FOUND
+
+
+class StalledUpload:
+    """An UploadBlob stream that sends its first chunk of `size` declared bytes, then nothing
+    until release() (which sends the rest) or forever."""
+
+    def __init__(self, client, size, seed=b"x"):
+        import hashlib
+        self.data = (seed * size)[:size]
+        digest = scene_pb2.Digest(sha256=hashlib.sha256(self.data).hexdigest(), size_bytes=size)
+        self.sent_first = threading.Event()
+        self.go_on = threading.Event()
+
+        def chunks():
+            yield service_pb2.UploadBlobRequest(digest=digest, data=self.data[:1024])
+            self.sent_first.set()
+            self.go_on.wait()
+            yield service_pb2.UploadBlobRequest(data=self.data[1024:])
+
+        self.future = client.stub.UploadBlob.future(chunks(), timeout=120)
+        # The generator goes past its first yield when gRPC asks for the second chunk; a
+        # stream the server refused at its first chunk never asks.
+        for _ in range(600):
+            if self.sent_first.wait(0.05) or self.future.done():
+                break
+        else:
+            raise AssertionError("the first chunk was never sent")
+
+    def release(self):
+        self.go_on.set()
+        return self.future.result(timeout=60)
+
+    def error(self):
+        """The status the server ended the stream with."""
+        try:
+            self.future.result(timeout=60)
+        except grpc.RpcError as e:
+            return e
+        raise AssertionError("the stalled upload succeeded")
+
+
+def wait_for_metric(server, name, value, **labels):
+    for _ in range(400):
+        if server.metric(name, **labels) == value:
+            return
+        time.sleep(0.05)
+    raise AssertionError(f"{name}{labels} never became {value}: {server.metric(name, **labels)}")
+
+
+def test_unfinished_uploads_count_against_the_cache_budget():
+    server = Server("--cache-bytes", str(1 << 20))
+    try:
+        with server.client() as c:
+            stalled = StalledUpload(c, 700 << 10)
+            wait_for_metric(server, "hgraph_cache_bytes", 700 << 10, kind="upload")
+            # Two unfinished 700 kB uploads would hold 1.4 MB against a 1 MiB budget.
+            second = StalledUpload(c, 700 << 10, seed=b"y")
+            e = second.error()
+            assert e.code() == grpc.StatusCode.RESOURCE_EXHAUSTED, e
+            assert "digest.size_bytes" in e.details() and "--cache-bytes" in e.details()
+            second.go_on.set()
+            # The first one completes, and its bytes now count as a blob, not a reservation.
+            assert stalled.release().stored
+            wait_for_metric(server, "hgraph_cache_bytes", 0, kind="upload")
+            assert server.metric("hgraph_cache_bytes", kind="blob") == 700 << 10
+    finally:
+        assert server.stop() == 0, "".join(server.log)
+
+
+def test_an_unfinished_upload_takes_an_admission_slot():
+    server = Server("--max-pending", "1")
+    try:
+        with server.client() as c:
+            stalled = StalledUpload(c, 64 << 10)
+            with pytest.raises(hgraph_client.HgraphError) as e:
+                c.create_session(c.upload_scene(DATA / "scene.json"))
+            assert e.value.code == grpc.StatusCode.RESOURCE_EXHAUSTED
+            assert "--max-pending" in str(e.value)
+            assert stalled.release().stored
+            # The slot is free again.
+            c.create_session(c.upload_scene(DATA / "scene.json"))
+            assert c.merge(input_paths(), timeout=30).result.quality.length > 0
+    finally:
+        assert server.stop() == 0, "".join(server.log)
+
+
+def test_an_idle_upload_is_aborted_and_its_bytes_released():
+    server = Server("--cache-bytes", str(1 << 20), "--upload-idle-timeout-s", "1",
+                    "--max-pending", "1")
+    try:
+        with server.client() as c:
+            stalled = StalledUpload(c, 900 << 10)
+            e = stalled.error()
+            stalled.go_on.set()
+            assert e.code() == grpc.StatusCode.ABORTED, e
+            assert "--upload-idle-timeout-s" in e.details(), e.details()
+            wait_for_metric(server, "hgraph_cache_bytes", 0, kind="upload")
+            # Its 900 kB and its admission slot are free: another upload of that size goes in.
+            blob = (b"z" * (900 << 10))
+            assert c.upload_blob(blob, timeout=30).size_bytes == len(blob)
+    finally:
+        assert server.stop() == 0, "".join(server.log)

@@ -1,113 +1,106 @@
-// Sessions and their owners (server/session_registry.h).
 #include "server/session_registry.h"
 
 #include <gtest/gtest.h>
 
 #include <chrono>
 #include <string>
+#include <vector>
 
 #include "core/common/error.h"
+#include "server/auth.h"
 
 namespace hgraph::server {
 namespace {
 
-using std::chrono::hours;
-using std::chrono::milliseconds;
+// Without --auth-tokens every session is the anonymous tenant's (session_tenants_test.cc covers
+// owners).
+const std::string kAnonymous(kAnonymousTenant);
 
-v1::Digest SceneDigest(char c) {
-  v1::Digest d;
-  d.set_sha256(std::string(64, c));
-  d.set_size_bytes(10);
-  return d;
+using namespace std::chrono_literals;
+
+v1::Digest Scene(char c) {
+  v1::Digest digest;
+  digest.set_sha256(std::string(64, c));
+  digest.set_size_bytes(10);
+  return digest;
 }
 
-const std::string kIdA(32, 'a');
-const std::string kIdB(32, 'b');
+const std::string kId = "0123456789abcdef0123456789abcdef";
 
-// The code of the Error `f` throws (fails the test if none).
-template <typename F>
-ErrorCode CodeOf(F f) {
+ErrorCode CodeOf(const std::function<void()>& f, std::string* field = nullptr) {
   try {
     f();
   } catch (const Error& e) {
+    if (field) *field = e.field();
     return e.code();
   }
   ADD_FAILURE() << "no error";
   return ErrorCode::kInvalidArgument;
 }
 
-TEST(SessionRegistry, ASessionBelongsToTheTenantThatCreatedIt) {
-  SessionRegistry registry(10, hours(1));
-  const v1::Session a = registry.Create(SceneDigest('1'), kIdA, "team-a");
-  EXPECT_EQ(registry.Touch(a.name(), "name", "team-a").name(), a.name());
-  EXPECT_EQ(CodeOf([&] { registry.Touch(a.name(), "name", "team-b"); }),
-            ErrorCode::kPermissionDenied);
-  EXPECT_EQ(CodeOf([&] { registry.Touch(a.name(), "name", ""); }), ErrorCode::kPermissionDenied);
-  EXPECT_EQ(CodeOf([&] { registry.Delete(a.name(), "name", "team-b"); }),
-            ErrorCode::kPermissionDenied);
-  // Re-creating another tenant's session by its id is refused too (ids are client-chosen).
-  EXPECT_EQ(CodeOf([&] { registry.Create(SceneDigest('1'), kIdA, "team-b"); }),
-            ErrorCode::kPermissionDenied);
-  // Refusals change nothing: the owner still has it, a retried create returns it.
-  EXPECT_EQ(registry.Create(SceneDigest('1'), kIdA, "team-a").name(), a.name());
+TEST(SessionRegistry, CreateWithAnIdIsIdempotentOnTheSameScene) {
+  SessionRegistry registry(10, 1h);
+  const v1::Session a = registry.Create(Scene('a'), kId, kAnonymous);
+  EXPECT_EQ(a.name(), "sessions/" + kId);
+  EXPECT_EQ(registry.Create(Scene('a'), kId, kAnonymous).name(), a.name());
   EXPECT_EQ(registry.size(), 1);
-  EXPECT_TRUE(registry.Delete(a.name(), "name", "team-a").empty());
-  EXPECT_EQ(CodeOf([&] { registry.Touch(a.name(), "name", "team-a"); }), ErrorCode::kNotFound);
+  std::string field;
+  EXPECT_EQ(CodeOf([&] { registry.Create(Scene('b'), kId, kAnonymous); }, &field),
+            ErrorCode::kFailedPrecondition);
+  EXPECT_EQ(field, "session_id");
+  EXPECT_EQ(CodeOf([&] { registry.Create(Scene('a'), "not-hex", kAnonymous); }, &field),
+            ErrorCode::kInvalidArgument);
+  EXPECT_EQ(field, "session_id");
 }
 
-TEST(SessionRegistry, PermissionDeniedNamesTheFieldButNotTheOwner) {
-  SessionRegistry registry(10, hours(1));
-  const v1::Session a = registry.Create(SceneDigest('1'), kIdA, "team-a");
-  try {
-    registry.Touch(a.name(), "session", "team-b");
-    FAIL() << "no error";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.field(), "session");
-    EXPECT_NE(std::string(e.what()).find("belongs to another tenant"), std::string::npos);
-    EXPECT_EQ(std::string(e.what()).find("team-a"), std::string::npos) << e.what();
-  }
+TEST(SessionRegistry, RandomIdsAreDistinctAndTheLimitHolds) {
+  SessionRegistry registry(2, 1h);
+  const std::string a = registry.Create(Scene('a'), "", kAnonymous).name();
+  const std::string b = registry.Create(Scene('a'), "", kAnonymous).name();
+  EXPECT_NE(a, b);
+  EXPECT_EQ(CodeOf([&] { registry.Create(Scene('a'), "", kAnonymous); }),
+            ErrorCode::kResourceExhausted);
 }
 
-TEST(SessionRegistry, ListShowsOnlyTheCallersSessions) {
-  SessionRegistry registry(10, hours(1));
-  registry.Create(SceneDigest('1'), kIdA, "team-a");
-  registry.Create(SceneDigest('1'), kIdB, "team-b");
-  registry.Create(SceneDigest('2'), "", "team-b");
-  ASSERT_EQ(registry.List("team-a").size(), 1u);
-  EXPECT_EQ(registry.List("team-a")[0].name(), "sessions/" + kIdA);
-  EXPECT_EQ(registry.List("team-b").size(), 2u);
-  EXPECT_TRUE(registry.List("").empty());
-  EXPECT_TRUE(registry.List("team-c").empty());
+TEST(SessionRegistry, HGraphsAreNamedInTheirSessionAndReturnedOnDelete) {
+  SessionRegistry registry(10, 1h);
+  const std::string session = registry.Create(Scene('a'), kId, kAnonymous).name();
+  const std::string first = registry.AddHGraph(session);
+  const std::string second = registry.AddHGraph(session);
+  EXPECT_EQ(first, session + "/hgraphs/1");
+  EXPECT_EQ(second, session + "/hgraphs/2");
+  EXPECT_EQ(SessionRegistry::SessionOfHGraph(second, "hgraph"), session);
+  registry.RemoveHGraph(first);
+  EXPECT_EQ(registry.Touch(session, "name", kAnonymous).hgraphs_size(), 1);
+  EXPECT_EQ(registry.Delete(session, "name", kAnonymous), std::vector<std::string>{second});
+  std::string field;
+  EXPECT_EQ(CodeOf([&] { registry.Touch(session, "name", kAnonymous); }, &field),
+            ErrorCode::kNotFound);
+  EXPECT_EQ(field, "name");
+  // A merge that finishes after the delete finds no session to add its H-Graph to.
+  EXPECT_EQ(CodeOf([&] { registry.AddHGraph(session); }), ErrorCode::kNotFound);
 }
 
-TEST(SessionRegistry, HGraphsAreReachedOnlyThroughTheirSession) {
-  SessionRegistry registry(10, hours(1));
-  const v1::Session a = registry.Create(SceneDigest('1'), kIdA, "team-a");
-  const std::string hgraph = registry.AddHGraph(a.name());
-  const std::string session = SessionRegistry::SessionOfHGraph(hgraph, "hgraph");
-  EXPECT_EQ(session, a.name());
-  EXPECT_EQ(CodeOf([&] { registry.Touch(session, "hgraph", "team-b"); }),
-            ErrorCode::kPermissionDenied);
-  EXPECT_EQ(registry.Delete(a.name(), "name", "team-a"), std::vector<std::string>{hgraph});
+TEST(SessionRegistry, MalformedNamesAreInputErrorsNamingTheField) {
+  SessionRegistry registry(10, 1h);
+  std::string field;
+  EXPECT_EQ(CodeOf([&] { registry.Touch("sessions/xyz", "session", kAnonymous); }, &field),
+            ErrorCode::kInvalidArgument);
+  EXPECT_EQ(field, "session");
+  EXPECT_EQ(CodeOf([&] { SessionRegistry::SessionOfHGraph("sessions/" + kId, "hgraph"); }, &field),
+            ErrorCode::kInvalidArgument);
+  EXPECT_EQ(field, "hgraph");
 }
 
-TEST(SessionRegistry, AnExpiredSessionNotYetSweptStaysItsOwners) {
-  // Its H-Graphs are still held under its name until ExpireIdle drops them, so another tenant
-  // must not take the name over in between.
-  SessionRegistry registry(10, milliseconds(0));
-  const v1::Session a = registry.Create(SceneDigest('1'), kIdA, "team-a");
-  registry.AddHGraph(a.name());
-  EXPECT_EQ(CodeOf([&] { registry.Create(SceneDigest('1'), kIdA, "team-b"); }),
-            ErrorCode::kPermissionDenied);
-  EXPECT_EQ(registry.ExpireIdle(SessionRegistry::Clock::now()).size(), 1u);
-  EXPECT_EQ(registry.Create(SceneDigest('1'), kIdA, "team-b").name(), a.name());
-}
-
-TEST(SessionRegistry, TheAnonymousTenantOwnsEverythingWithoutTokens) {
-  SessionRegistry registry(10, hours(1));
-  const v1::Session s = registry.Create(SceneDigest('1'), "", "");
-  EXPECT_EQ(registry.Touch(s.name(), "name", "").name(), s.name());
-  EXPECT_EQ(registry.List("").size(), 1u);
+TEST(SessionRegistry, IdleSessionsExpireWithTheirHGraphs) {
+  SessionRegistry registry(10, 1h);
+  const std::string session = registry.Create(Scene('a'), kId, kAnonymous).name();
+  const std::string hgraph = registry.AddHGraph(session);
+  EXPECT_TRUE(registry.ExpireIdle(SessionRegistry::Clock::now() + 30min).empty());
+  EXPECT_EQ(registry.size(), 1);
+  EXPECT_EQ(registry.ExpireIdle(SessionRegistry::Clock::now() + 2h),
+            std::vector<std::string>{hgraph});
+  EXPECT_EQ(registry.size(), 0);
 }
 
 }  // namespace
