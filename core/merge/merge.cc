@@ -159,7 +159,7 @@ HybridizationSession::HybridizationSession(const MotionChecker& checker,
   for (int e = 0; e < graph_.num_edges(); ++e) input_edges[e] = e;
   build_stats_.input_edges = graph_.num_edges();
   if (eager || options_.report_inputs) {
-    CheckEdges(input_edges, /*need_clearance=*/true, "inputs", request.progress, request.cancel,
+    CheckEdges(input_edges, EdgeNeed::kClearance, "inputs", request.progress, request.cancel,
                &build_stats_.edges_checked);
     for (int e : input_edges) {
       if (graph_.edge(e).report.state == EdgeState::kInvalid) ++build_stats_.input_edges_invalid;
@@ -190,8 +190,9 @@ HybridizationSession::HybridizationSession(const MotionChecker& checker,
 
   if (eager) {
     phase = Clock::now();
-    CheckEdges(bridge_edges, NeedsClearance(request.measure), "check", request.progress,
-               request.cancel, &build_stats_.edges_checked);
+    CheckEdges(bridge_edges,
+               NeedsClearance(request.measure) ? EdgeNeed::kClearance : EdgeNeed::kValidity,
+               "check", request.progress, request.cancel, &build_stats_.edges_checked);
     build_timing_.check_ms = MsSince(phase);
   }
   for (int e = 0; e < graph_.num_edges(); ++e) {
@@ -204,7 +205,7 @@ HybridizationSession::HybridizationSession(const MotionChecker& checker,
   build_timing_.total_ms = MsSince(started);
 }
 
-void HybridizationSession::CheckEdges(const std::vector<int>& edge_ids, bool need_clearance,
+void HybridizationSession::CheckEdges(const std::vector<int>& edge_ids, EdgeNeed need,
                                       const std::string& phase, const ProgressCallback& progress,
                                       const CancelToken& cancel, int64_t* checked) {
   const int64_t total = static_cast<int64_t>(edge_ids.size());
@@ -222,7 +223,8 @@ void HybridizationSession::CheckEdges(const std::vector<int>& edge_ids, bool nee
             edge.report = checker_->CheckEdge(EdgeCheckRequest{
                 .from = &graph_.node(edge.u).q,
                 .to = &graph_.node(edge.v).q,
-                .mode = !(need_clearance || edge.input)       ? EdgeCheckMode::kSampled
+                .mode = need == EdgeNeed::kValidity           ? EdgeCheckMode::kSampled
+                        : need == EdgeNeed::kCertificate      ? EdgeCheckMode::kCertified
                         : previous.state == EdgeState::kValid ? EdgeCheckMode::kClearanceOfValid
                                                               : EdgeCheckMode::kClearance});
             // A re-check for clearance keeps counting what the first check cost.
@@ -315,8 +317,8 @@ int64_t HybridizationSession::AddPaths(const std::vector<InputPath>& paths,
   build_stats_.candidate_edges += static_cast<int64_t>(bridges.size());
   if (options_.evaluation == Evaluation::kEager) {
     int64_t checked = 0;
-    CheckEdges(input_edges, true, "inputs", progress, cancel, &checked);
-    CheckEdges(bridges, false, "check", progress, cancel, &checked);
+    CheckEdges(input_edges, EdgeNeed::kClearance, "inputs", progress, cancel, &checked);
+    CheckEdges(bridges, EdgeNeed::kValidity, "check", progress, cancel, &checked);
   }
   return static_cast<int64_t>(bridges.size());
 }
@@ -335,7 +337,7 @@ void HybridizationSession::SyncEdgeData() {
   }
 }
 
-SearchResult HybridizationSession::SearchBest(const Measure& measure, bool profile,
+SearchResult HybridizationSession::SearchBest(const Measure& measure, EdgeNeed finish,
                                               const ProgressCallback& progress,
                                               const CancelToken& cancel, MergeResult* result,
                                               int64_t* rechecked) {
@@ -372,16 +374,17 @@ SearchResult HybridizationSession::SearchBest(const Measure& measure, bool profi
 
   // Lazy search: edges are seen through their bounds and checked only when the search would
   // settle a node through them (core/search/search.h); eager evaluation has checked them all
-  // already. Then, with `profile`, the path's own edges get clearance profiles so that every
-  // measure can be reported; the clearance check refines between samples and can find a
-  // collision the validity check missed, and then the search runs again.
+  // already. Then the path's own edges get their certificates (and with kClearance their
+  // profiles, so that every measure can be reported); that check can find a collision the
+  // validity check missed, or a motion it cannot certify, and then the search runs again.
   for (;;) {
     Clock::time_point phase = Clock::now();
     double checking_ms = 0;
     LazySearchStats lazy;
     const EvaluateFn evaluate = [&](const std::vector<int>& edges) {
       const Clock::time_point checking = Clock::now();
-      CheckEdges(edges, needs_clearance, "check", progress, cancel, rechecked);
+      CheckEdges(edges, needs_clearance ? EdgeNeed::kClearance : EdgeNeed::kValidity, "check",
+                 progress, cancel, rechecked);
       checking_ms += MsSince(checking);
     };
     SearchResult best =
@@ -401,13 +404,15 @@ SearchResult HybridizationSession::SearchBest(const Measure& measure, bool profi
           "the valid, certified edges of the H-Graph do not connect start and goal (are the "
           "inputs valid?)");
     }
-    if (!profile) return best;
     phase = Clock::now();
     std::vector<int> output_recheck;
     for (int e : best.edges) {
-      if (!graph_.edge(e).report.has_clearance) output_recheck.push_back(e);
+      const EdgeReport& report = graph_.edge(e).report;
+      if (finish == EdgeNeed::kClearance ? !report.has_clearance : !report.certified) {
+        output_recheck.push_back(e);
+      }
     }
-    CheckEdges(output_recheck, true, "evaluate", progress, cancel, rechecked);
+    CheckEdges(output_recheck, finish, "evaluate", progress, cancel, rechecked);
     result->timing.evaluate_ms += MsSince(phase);
     bool still_valid = true;
     for (int e : output_recheck) {
@@ -473,8 +478,9 @@ SearchResult HybridizationSession::Optimize(const Measure& measure, SearchResult
         graph_.AddEdge(u, v, false);
       }
     }
-    // Profiled, so that every objective streamed is that of a certified path.
-    SearchResult next = SearchBest(measure, /*profile=*/true, progress, cancel, result, rechecked);
+    // Certified, so that every objective streamed is that of a certified path.
+    SearchResult next =
+        SearchBest(measure, EdgeNeed::kCertificate, progress, cancel, result, rechecked);
     const double next_objective =
         measure.Objective(EvaluateEdges(graph_, next.edges, measure.spec().k));
     const bool improved = next_objective < objective * (1 - kOptimizeMinGain);
@@ -535,13 +541,20 @@ MergeResult HybridizationSession::Query(const MeasureSpec& spec, const ProgressC
         if (report.state == EdgeState::kValid && !report.has_clearance) recheck.push_back(e);
       }
     }
-    CheckEdges(recheck, true, "clearance", progress, cancel, &rechecked);
+    CheckEdges(recheck, EdgeNeed::kClearance, "clearance", progress, cancel, &rechecked);
   }
   result.timing.check_ms += MsSince(phase);
 
-  SearchResult best = SearchBest(*measure, /*profile=*/true, progress, cancel, &result, &rechecked);
+  // The optimum is certified first; the profiles, which only the report needs under a measure
+  // that does not search by clearance, are computed once, for the final path.
+  SearchResult best =
+      SearchBest(*measure, needs_clearance ? EdgeNeed::kClearance : EdgeNeed::kCertificate,
+                 progress, cancel, &result, &rechecked);
   result.hgraph_objective = measure->Objective(EvaluateEdges(graph_, best.edges, spec.k));
   best = Optimize(*measure, std::move(best), progress, cancel, &result, &rechecked);
+  if (!needs_clearance) {
+    best = SearchBest(*measure, EdgeNeed::kClearance, progress, cancel, &result, &rechecked);
+  }
   phase = Clock::now();
   result.quality = EvaluateEdges(graph_, best.edges, spec.k);
   for (int n : best.nodes) {

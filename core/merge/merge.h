@@ -142,9 +142,12 @@ class HybridizationSession {
 
  private:
   HybridizationSession(const HybridizationSession&) = default;
-  // Checks the edges in parallel; input edges always get their clearance profile (inputs are
-  // reported under every measure), bridges only with need_clearance.
-  void CheckEdges(const std::vector<int>& edge_ids, bool need_clearance, const std::string& phase,
+  // What a check of an edge must establish: validity at the resolution's samples (kSampled), a
+  // certificate of the whole motion without a profile (kCertified, a few distance queries in
+  // open space), or the clearance profile with its certificate.
+  enum class EdgeNeed { kValidity, kCertificate, kClearance };
+  // Checks the edges in parallel for `need`.
+  void CheckEdges(const std::vector<int>& edge_ids, EdgeNeed need, const std::string& phase,
                   const ProgressCallback& progress, const CancelToken& cancel, int64_t* checked);
   // Computes the clearance of every node that lacks one (the lazy bounds use them). Returns how
   // many it computed.
@@ -153,10 +156,11 @@ class HybridizationSession {
   EdgeBoundInput BoundInput(int e);
   // Extends the per-node and per-edge data to nodes and edges added since.
   void SyncEdgeData();
-  // The best path under `measure` with every edge checked; with `profile`, every edge also
-  // carries its clearance profile (which can find a collision a sampled check missed; then the
-  // search runs again). Adds to the result's stats and timing.
-  SearchResult SearchBest(const Measure& measure, bool profile, const ProgressCallback& progress,
+  // The best path under `measure` with every edge checked, and then certified (`finish`
+  // kCertificate) or also profiled (kClearance, so that every measure can be reported). The
+  // certificate can find a collision a sampled check missed, or fail where a motion grazes an
+  // obstacle; then the search runs again. Adds to the result's stats and timing.
+  SearchResult SearchBest(const Measure& measure, EdgeNeed finish, const ProgressCallback& progress,
                           const CancelToken& cancel, MergeResult* result, int64_t* rechecked);
   // The anytime post-optimization of `best` (MergeOptions.optimize_ms).
   SearchResult Optimize(const Measure& measure, SearchResult best, const ProgressCallback& progress,
