@@ -6,10 +6,15 @@
 #include <string>
 #include <utility>
 
+#include "core/common/client_text.h"
+
 namespace hgraph::server {
 namespace {
 
 constexpr char kService[] = "hgraph.v1.PathMerger";
+// Every error message is escaped and bounded as a whole too (each client string in it already
+// is, at kClientTextMaxBytes): well under gRPC's 8 KiB default metadata limit.
+constexpr size_t kMaxMessageBytes = 2000;
 
 const char* CallType(const std::string& method) {
   if (method == "MergePaths" || method == "PlanPaths") return "server_stream";
@@ -28,13 +33,14 @@ grpc::Status Invoke(const std::function<void()>& body, const CancelToken& token)
     if (code == grpc::StatusCode::CANCELLED && token.deadline_passed()) {
       return grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED, "deadline exceeded");
     }
-    return grpc::Status(code, e.what());
+    return grpc::Status(code, ClientText(e.what(), kMaxMessageBytes));
   } catch (const std::bad_alloc&) {
     return grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED, "out of memory");
   } catch (const std::exception& e) {
     // A broken invariant (InternalError) fails this call only; it is a bug worth a log line.
-    spdlog::error("internal error: {}", e.what());
-    return grpc::Status(grpc::StatusCode::INTERNAL, e.what());
+    const std::string message = ClientText(e.what(), kMaxMessageBytes);
+    spdlog::error("internal error: {}", message);
+    return grpc::Status(grpc::StatusCode::INTERNAL, message);
   }
 }
 
@@ -107,10 +113,11 @@ void PathMergerService::RecordCall(const std::string& method, const std::string&
       {{"grpc_type", type}, {"grpc_service", kService}, {"grpc_method", method}}, seconds);
   if (status.ok()) {
     spdlog::info("{} session={} status={} duration_ms={:.1f}", method,
-                 session.empty() ? "-" : session, code, seconds * 1e3);
+                 session.empty() ? "-" : ClientText(session), code, seconds * 1e3);
   } else {
     spdlog::info("{} session={} status={} duration_ms={:.1f} error=\"{}\"", method,
-                 session.empty() ? "-" : session, code, seconds * 1e3, status.error_message());
+                 session.empty() ? "-" : ClientText(session), code, seconds * 1e3,
+                 ClientText(status.error_message(), kMaxMessageBytes));
   }
 }
 

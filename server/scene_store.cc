@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "core/adapter/scene_proto.h"
+#include "core/common/client_text.h"
 #include "core/common/digest.h"
 #include "core/common/error.h"
 
@@ -53,6 +54,16 @@ void CheckMesh(const v1::Shape& shape, const std::string& field, const SceneStor
   }
 }
 
+// A digest names its content by hash and size: a right hash with a wrong size is refused.
+void CheckSceneSize(const v1::Scene& scene, const v1::Digest& digest, const std::string& field) {
+  const int64_t size = static_cast<int64_t>(scene.ByteSizeLong());
+  if (size != digest.size_bytes()) {
+    throw InputError(field + ".size_bytes", "scene sha256:" + digest.sha256() + " is " +
+                                                std::to_string(size) + " bytes, the digest says " +
+                                                std::to_string(digest.size_bytes()));
+  }
+}
+
 }  // namespace
 
 std::string DigestText(const v1::Digest& digest) {
@@ -62,7 +73,7 @@ std::string DigestText(const v1::Digest& digest) {
 void ValidateDigest(const v1::Digest& digest, const std::string& field) {
   if (!IsSha256Hex(digest.sha256())) {
     throw InputError(field + ".sha256", "must be 64 lower-case hex digits, got \"" +
-                                            digest.sha256().substr(0, 80) + "\"");
+                                            ClientText(digest.sha256()) + "\"");
   }
   if (digest.size_bytes() < 0) {
     throw InputError(field + ".size_bytes",
@@ -145,6 +156,7 @@ LoadedScene SceneStore::Get(const v1::Digest& digest, const std::string& field,
     if (auto world = cache_.Get<const CollisionWorld>(CacheKind::kWorld, sha)) {
       auto proto = cache_.Get<const v1::Scene>(CacheKind::kScene, sha);
       if (proto) {
+        CheckSceneSize(*proto, digest, field);
         metrics_.scene_cache_hits.Increment();
         return LoadedScene{proto, world};
       }
@@ -162,7 +174,7 @@ LoadedScene SceneStore::Get(const v1::Digest& digest, const std::string& field,
   }
   metrics_.scene_cache_misses.Increment();
   try {
-    LoadedScene loaded = Load(sha, field, token);
+    LoadedScene loaded = Load(digest, field, token);
     promise.set_value(loaded);
     std::lock_guard lock(loading_mutex_);
     loading_.erase(sha);
@@ -175,8 +187,9 @@ LoadedScene SceneStore::Get(const v1::Digest& digest, const std::string& field,
   }
 }
 
-LoadedScene SceneStore::Load(const std::string& sha, const std::string& field,
+LoadedScene SceneStore::Load(const v1::Digest& digest, const std::string& field,
                              const CancelToken& token) {
+  const std::string& sha = digest.sha256();
   auto proto = cache_.Get<const v1::Scene>(CacheKind::kScene, sha);
   if (!proto) {
     throw Error(ErrorCode::kNotFound, field,
@@ -184,8 +197,9 @@ LoadedScene SceneStore::Load(const std::string& sha, const std::string& field,
                     " is not held by this server (never stored, or evicted under the memory "
                     "budget); store it again with PutScene");
   }
-  BlobResolver resolver = [this](const v1::Digest& digest) -> std::optional<std::string> {
-    auto blob = cache_.Get<const std::string>(CacheKind::kBlob, digest.sha256());
+  CheckSceneSize(*proto, digest, field);
+  BlobResolver resolver = [this](const v1::Digest& blob_digest) -> std::optional<std::string> {
+    auto blob = cache_.Get<const std::string>(CacheKind::kBlob, blob_digest.sha256());
     if (!blob) return std::nullopt;
     return *blob;
   };

@@ -46,13 +46,14 @@ class SceneStore {
 
   // The scene and its collision world, built on first use and shared by every session that
   // names the same digest; concurrent first uses wait for one load. Throws Error(kNotFound,
-  // field) if the scene (or a blob it needs) is not held.
+  // field) if the scene (or a blob it needs) is not held, InputError(field + ".size_bytes") if
+  // the digest's size is not the scene's.
   LoadedScene Get(const v1::Digest& digest, const std::string& field,
                   const CancelToken& token = CancelToken());
   bool HasScene(const v1::Digest& digest) const;
 
  private:
-  LoadedScene Load(const std::string& sha, const std::string& field, const CancelToken& token);
+  LoadedScene Load(const v1::Digest& digest, const std::string& field, const CancelToken& token);
 
   ResourceCache& cache_;
   ServiceMetrics& metrics_;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "core/common/client_text.h"
 #include "core/common/digest.h"
 #include "core/common/error.h"
 
@@ -28,12 +29,13 @@ SessionRegistry::SessionRegistry(int max_sessions, std::chrono::milliseconds ttl
 void SessionRegistry::ValidateName(const std::string& name, const std::string& field) {
   if (name.rfind(kPrefix, 0) != 0 || name.size() != kPrefix.size() + 32) {
     throw InputError(field,
-                     "must be \"sessions/<32 hex digits>\", got \"" + name.substr(0, 100) + "\"");
+                     "must be \"sessions/<32 hex digits>\", got \"" + ClientText(name) + "\"");
   }
   for (size_t i = kPrefix.size(); i < name.size(); ++i) {
     const char c = name[i];
     if (!((c >= '0' && c <= '9') || (c >= 'a' && c <= 'f'))) {
-      throw InputError(field, "must be \"sessions/<32 hex digits>\", got \"" + name + "\"");
+      throw InputError(field,
+                       "must be \"sessions/<32 hex digits>\", got \"" + ClientText(name) + "\"");
     }
   }
 }
@@ -44,8 +46,8 @@ std::string SessionRegistry::SessionOfHGraph(const std::string& hgraph, const st
                   std::all_of(hgraph.begin() + static_cast<long>(at + kHGraphs.size()),
                               hgraph.end(), [](char c) { return c >= '0' && c <= '9'; });
   if (!ok) {
-    throw InputError(
-        field, "must be \"sessions/<id>/hgraphs/<n>\", got \"" + hgraph.substr(0, 120) + "\"");
+    throw InputError(field,
+                     "must be \"sessions/<id>/hgraphs/<n>\", got \"" + ClientText(hgraph) + "\"");
   }
   std::string session = hgraph.substr(0, at);
   ValidateName(session, field);

@@ -10,6 +10,7 @@
 #include "core/adapter/merge_proto.h"
 #include "core/adapter/path_io.h"
 #include "core/adapter/scene_proto.h"
+#include "core/common/client_text.h"
 #include "core/common/limits.h"
 #include "core/merge/path_check.h"
 #include "server/call_support.h"
@@ -160,7 +161,7 @@ grpc::ServerUnaryReactor* PathMergerService::Requery(grpc::CallbackServerContext
         auto stored = cache_.Get<StoredHGraph>(CacheKind::kHGraph, request->hgraph());
         if (!stored) {
           throw Error(ErrorCode::kNotFound, "hgraph",
-                      request->hgraph() +
+                      ClientText(request->hgraph()) +
                           " is not held by this server (evicted under the memory budget, or "
                           "never built here); merge the paths again");
         }

@@ -18,7 +18,6 @@
 namespace hgraph {
 namespace {
 
-
 std::string Index(const std::string& field, int i) { return field + "[" + std::to_string(i) + "]"; }
 
 std::string Num(double v) {
@@ -174,8 +173,8 @@ class ShapeConverter {
 
   static void RequireScaledSize(double size, const std::string& field) {
     if (!(size <= limits::kMaxCoordinate)) {
-      throw InputError(field, "scaled size " + Num(size) + " exceeds " +
-                                  Num(limits::kMaxCoordinate));
+      throw InputError(field,
+                       "scaled size " + Num(size) + " exceeds " + Num(limits::kMaxCoordinate));
     }
   }
 
@@ -262,9 +261,9 @@ class ShapeConverter {
       throw InputError(field + ".format",
                        "required for " + what + " (a file extension such as \"obj\")");
     }
-    if (format.size() > 16 ||
-        !std::all_of(format.begin(), format.end(),
-                     [](char c) { return std::isalnum(static_cast<unsigned char>(c)) != 0; })) {
+    if (format.size() > 16 || !std::all_of(format.begin(), format.end(), [](char c) {
+          return std::isalnum(static_cast<unsigned char>(c)) != 0;
+        })) {
       throw InputError(field + ".format",
                        "must be a file extension of 1 to 16 letters and digits (such as \"obj\")");
     }

@@ -92,8 +92,7 @@ double FarthestDistance(const Shape& shape, const Eigen::Vector3d& origin) {
       }
       return best;
     }
-    case ShapeType::kSphere:
-      return origin.norm() + shape.radius;
+    case ShapeType::kSphere: return origin.norm() + shape.radius;
     case ShapeType::kCylinder: {
       // The farthest point lies on a rim, on the side away from the origin's axis projection.
       const double radial = origin.head<2>().norm() + shape.radius;
@@ -102,7 +101,8 @@ double FarthestDistance(const Shape& shape, const Eigen::Vector3d& origin) {
     }
     case ShapeType::kMesh: {
       double best = 0;
-      for (const Eigen::Vector3d& v : shape.mesh->vertices) best = std::max(best, (v - origin).norm());
+      for (const Eigen::Vector3d& v : shape.mesh->vertices)
+        best = std::max(best, (v - origin).norm());
       return best;
     }
   }
@@ -287,8 +287,9 @@ double CollisionContext::Clearance(const Config& q) {
     if (data.min_distance <= 0) return 0.0;
   }
   for (const auto& [i, j] : w.self_pairs) {
-    data.min_distance = std::min(
-        data.min_distance, PairDistance(impl_->bodies[i].get(), impl_->bodies[j].get(), data.request));
+    data.min_distance =
+        std::min(data.min_distance,
+                 PairDistance(impl_->bodies[i].get(), impl_->bodies[j].get(), data.request));
     if (data.min_distance <= 0) return 0.0;
   }
   return data.min_distance;

@@ -69,9 +69,19 @@ Alignment AlignPaths(int m, int n, const AlignmentDelta& delta, double gap_init,
   while (i > 0 || j > 0) {
     const uint8_t prev = from[state][at(i, j)];
     switch (state) {
-      case kMatch: result.columns.push_back({i - 1, j - 1}); --i; --j; break;
-      case kGapP: result.columns.push_back({i - 1, -1}); --i; break;
-      case kGapQ: result.columns.push_back({-1, j - 1}); --j; break;
+      case kMatch:
+        result.columns.push_back({i - 1, j - 1});
+        --i;
+        --j;
+        break;
+      case kGapP:
+        result.columns.push_back({i - 1, -1});
+        --i;
+        break;
+      case kGapQ:
+        result.columns.push_back({-1, j - 1});
+        --j;
+        break;
     }
     state = prev;
   }

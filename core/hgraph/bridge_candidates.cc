@@ -4,6 +4,7 @@
 #include <cmath>
 #include <unordered_set>
 
+#include "core/common/client_text.h"
 #include "core/common/error.h"
 #include "core/hgraph/alignment.h"
 
@@ -34,9 +35,8 @@ class PairCollector {
 // Bridges suggested by the alignment of paths a and b (paper, "Using Path Matching to Speed Up
 // the Construction of H-Graphs"): every matched pair, and every node in a gap to the two nodes
 // of the other path that bound the gap. At most 2 (|a| + |b|) pairs.
-void AddAlignmentBridges(const HGraph& graph, const Space& space, int a, int b,
-                         double gap_init, double gap_extend, double radius,
-                         PairCollector& out) {
+void AddAlignmentBridges(const HGraph& graph, const Space& space, int a, int b, double gap_init,
+                         double gap_extend, double radius, PairCollector& out) {
   const std::vector<int>& pa = graph.path_nodes(a);
   const std::vector<int>& pb = graph.path_nodes(b);
   const auto delta = [&](int i, int j) {
@@ -90,7 +90,7 @@ Variant ParseVariant(const std::string& name, const std::string& field) {
                     Variant::kEditDistance, Variant::kEditDistanceNeighborhood}) {
     if (name == VariantName(v)) return v;
   }
-  throw InputError(field, "unknown variant '" + name +
+  throw InputError(field, "unknown variant '" + ClientText(name) +
                               "' (expected all-pairs, neighborhood, knn, edit-distance or "
                               "edit-distance-neighborhood)");
 }

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "core/common/client_text.h"
 #include "core/common/error.h"
 #include "core/common/limits.h"
 
@@ -29,16 +30,16 @@ HGraph::HGraph(const Space& space, std::vector<InputPath> paths, double endpoint
     const double ds = space.Distance(path.waypoints.front(), start);
     if (ds > endpoint_tolerance) {
       throw InputError(field + ".waypoints[0]",
-                       "path '" + path.name + "' starts " + std::to_string(ds) +
-                           " away from the start of path '" + paths_[0].name + "' (tolerance " +
-                           std::to_string(endpoint_tolerance) + ")");
+                       "path '" + ClientText(path.name) + "' starts " + std::to_string(ds) +
+                           " away from the start of path '" + ClientText(paths_[0].name) +
+                           "' (tolerance " + std::to_string(endpoint_tolerance) + ")");
     }
     const double dg = space.Distance(path.waypoints.back(), goal);
     if (dg > endpoint_tolerance) {
       throw InputError(field + ".waypoints[" + std::to_string(path.waypoints.size() - 1) + "]",
-                       "path '" + path.name + "' ends " + std::to_string(dg) +
-                           " away from the goal of path '" + paths_[0].name + "' (tolerance " +
-                           std::to_string(endpoint_tolerance) + ")");
+                       "path '" + ClientText(path.name) + "' ends " + std::to_string(dg) +
+                           " away from the goal of path '" + ClientText(paths_[0].name) +
+                           "' (tolerance " + std::to_string(endpoint_tolerance) + ")");
     }
   }
 
@@ -53,7 +54,7 @@ void HGraph::PrepareWaypoints(const Space& space, int index, const std::string& 
                               InputPath& path) {
   if (path.name.empty()) path.name = "path" + std::to_string(index);
   if (path.waypoints.size() < 2) {
-    throw InputError(field + ".waypoints", "path '" + path.name + "' has " +
+    throw InputError(field + ".waypoints", "path '" + ClientText(path.name) + "' has " +
                                                std::to_string(path.waypoints.size()) +
                                                " waypoint(s); at least 2 are required");
   }
@@ -76,7 +77,7 @@ InputPath HGraph::CheckedPath(const Space& space, InputPath path, double endpoin
   PrepareWaypoints(space, num_paths(), field, path);
   const double ds = space.Distance(path.waypoints.front(), node(start_id()).q);
   if (ds > endpoint_tolerance) {
-    throw InputError(field + ".waypoints[0]", "path '" + path.name + "' starts " +
+    throw InputError(field + ".waypoints[0]", "path '" + ClientText(path.name) + "' starts " +
                                                   std::to_string(ds) +
                                                   " away from the H-Graph's start (tolerance " +
                                                   std::to_string(endpoint_tolerance) + ")");
@@ -84,11 +85,53 @@ InputPath HGraph::CheckedPath(const Space& space, InputPath path, double endpoin
   const double dg = space.Distance(path.waypoints.back(), node(goal_id()).q);
   if (dg > endpoint_tolerance) {
     throw InputError(field + ".waypoints[" + std::to_string(path.waypoints.size() - 1) + "]",
-                     "path '" + path.name + "' ends " + std::to_string(dg) +
+                     "path '" + ClientText(path.name) + "' ends " + std::to_string(dg) +
                          " away from the H-Graph's goal (tolerance " +
                          std::to_string(endpoint_tolerance) + ")");
   }
   return path;
+}
+
+double HGraph::EdgeParts(const Space& space, const InputPath& path, size_t j,
+                         double max_node_spacing) {
+  const double length = space.Distance(path.waypoints[j], path.waypoints[j + 1]);
+  const double parts = std::ceil(length / max_node_spacing);
+  // A bound on the parts keeps a tiny spacing from exhausting memory; the message says how
+  // to stay under it.
+  if (parts > kMaxPartsPerEdge) {
+    char text[200];
+    std::snprintf(text, sizeof(text),
+                  "%g would cut edge %zu of path '%.60s' (length %g) into more than %d parts",
+                  max_node_spacing, j, path.name.c_str(), length, kMaxPartsPerEdge);
+    throw InputError("options.max_node_spacing", text);
+  }
+  return parts;
+}
+
+void HGraph::CheckNodeCount(double nodes, double max_node_spacing) {
+  if (nodes > limits::kMaxNodes) {
+    throw InputError("options.max_node_spacing",
+                     limits::Num(max_node_spacing) + " would give the H-Graph more than " +
+                         std::to_string(limits::kMaxNodes) +
+                         " nodes; use a larger spacing (or 0 = no subdivision)");
+  }
+}
+
+int64_t HGraph::CheckNewPaths(const Space& space, const std::vector<InputPath>& paths,
+                              double endpoint_tolerance, double max_node_spacing,
+                              const std::string& field) const {
+  double nodes = num_nodes();
+  for (size_t i = 0; i < paths.size(); ++i) {
+    const InputPath path =
+        CheckedPath(space, paths[i], endpoint_tolerance, field + "[" + std::to_string(i) + "]");
+    const size_t n = path.waypoints.size();
+    nodes += n >= 2 ? static_cast<double>(n - 2) : 0.0;
+    for (size_t j = 0; max_node_spacing > 0 && j + 1 < n; ++j) {
+      nodes += EdgeParts(space, path, j, max_node_spacing) - 1;
+    }
+    CheckNodeCount(nodes, max_node_spacing);
+  }
+  return static_cast<int64_t>(nodes) - num_nodes();
 }
 
 void HGraph::AppendPath(const Space& space, int p, double max_node_spacing) {
@@ -107,23 +150,8 @@ void HGraph::AppendPath(const Space& space, int p, double max_node_spacing) {
       const int index = static_cast<int>(j);
       if (j > 0) add_node(HNode{.q = waypoints[j], .path = p, .index = index});
       if (max_node_spacing <= 0) continue;
-      const double length = space.Distance(waypoints[j], waypoints[j + 1]);
-      const double parts = std::ceil(length / max_node_spacing);
-      // A bound on the parts keeps a tiny spacing from exhausting memory; the message says how
-      // to stay under it.
-      if (parts > kMaxPartsPerEdge) {
-        char text[200];
-        std::snprintf(text, sizeof(text),
-                      "%g would cut edge %zu of path '%.60s' (length %g) into more than %d parts",
-                      max_node_spacing, j, paths_[p].name.c_str(), length, kMaxPartsPerEdge);
-        throw InputError("options.max_node_spacing", text);
-      }
-      if (num_nodes() + parts > limits::kMaxNodes) {
-        throw InputError("options.max_node_spacing",
-                         limits::Num(max_node_spacing) + " would give the H-Graph more than " +
-                             std::to_string(limits::kMaxNodes) +
-                             " nodes; use a larger spacing (or 0 = no subdivision)");
-      }
+      const double parts = EdgeParts(space, paths_[p], j, max_node_spacing);
+      CheckNodeCount(num_nodes() + parts, max_node_spacing);
       for (int k = 1; k < static_cast<int>(parts); ++k) {
         const double t = k / parts;
         add_node(HNode{.q = space.Interpolate(waypoints[j], waypoints[j + 1], t),

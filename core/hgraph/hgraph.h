@@ -62,6 +62,12 @@ class HGraph {
   InputPath CheckedPath(const Space& space, InputPath path, double endpoint_tolerance,
                         const std::string& field) const;
 
+  // Validates paths to be added with AddPath (as AddPath would, subdivision limits included,
+  // errors naming `field`[i]) without changing the H-Graph; returns the nodes they would add.
+  int64_t CheckNewPaths(const Space& space, const std::vector<InputPath>& paths,
+                        double endpoint_tolerance, double max_node_spacing,
+                        const std::string& field) const;
+
   // Adds a node outside every input path (path = -1; the post-optimization's shortcut points)
   // and returns its id.
   int AddNode(const Config& q);
@@ -95,6 +101,11 @@ class HGraph {
   static void PrepareWaypoints(const Space& space, int index, const std::string& field,
                                InputPath& path);
   void AppendPath(const Space& space, int p, double max_node_spacing);
+  // The parts edge j of the path is cut into at that spacing (> 0); throws past the limit.
+  static double EdgeParts(const Space& space, const InputPath& path, size_t j,
+                          double max_node_spacing);
+  // Throws when an H-Graph of `nodes` nodes would be too large.
+  static void CheckNodeCount(double nodes, double max_node_spacing);
   static constexpr int start_id() { return 0; }
   static constexpr int goal_id() { return 1; }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/common/client_text.h"
 #include "core/common/error.h"
 
 namespace hgraph {
@@ -33,7 +34,7 @@ MeasureType ParseMeasureType(const std::string& name, const std::string& field) 
                         MeasureType::kBottleneckClearance, MeasureType::kSafeLength}) {
     if (name == MeasureTypeName(t)) return t;
   }
-  throw InputError(field, "unknown measure '" + name +
+  throw InputError(field, "unknown measure '" + ClientText(name) +
                               "' (expected length, inverse-clearance, bottleneck-clearance or "
                               "safe-length)");
 }

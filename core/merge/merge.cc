@@ -12,6 +12,7 @@
 #include <limits>
 #include <mutex>
 
+#include "core/common/client_text.h"
 #include "core/common/error.h"
 #include "core/common/parallel.h"
 #include "core/merge/path_check.h"
@@ -129,7 +130,7 @@ Evaluation ParseEvaluation(const std::string& name, const std::string& field) {
   for (Evaluation e : {Evaluation::kLazy, Evaluation::kEager}) {
     if (name == EvaluationName(e)) return e;
   }
-  throw InputError(field, "unknown evaluation '" + name + "' (expected lazy or eager)");
+  throw InputError(field, "unknown evaluation '" + ClientText(name) + "' (expected lazy or eager)");
 }
 
 HybridizationSession::HybridizationSession(const MotionChecker& checker,
@@ -280,13 +281,8 @@ int64_t HybridizationSession::AddPaths(const std::vector<InputPath>& paths,
   const Space& space = checker_->space();
   if (paths.empty()) throw InputError("paths", "at least one path is required");
   // Validate every path before the H-Graph changes.
-  {
-    HGraph probe = graph_;
-    for (size_t i = 0; i < paths.size(); ++i) {
-      probe.AddPath(space, paths[i], options_.endpoint_tolerance, options_.max_node_spacing,
-                    "paths[" + std::to_string(i) + "]");
-    }
-  }
+  graph_.CheckNewPaths(space, paths, options_.endpoint_tolerance, options_.max_node_spacing,
+                       "paths");
   const double reach = options_.candidates.variant == Variant::kAllPairs
                            ? std::numeric_limits<double>::infinity()
                        : build_stats_.radius > 0 ? build_stats_.radius

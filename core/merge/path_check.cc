@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "core/common/client_text.h"
 #include "core/common/error.h"
 #include "core/common/parallel.h"
 
@@ -103,7 +104,8 @@ PathCheckResult CheckPaths(const MotionChecker& checker, const PathCheckRequest&
     const std::string field = request.field + "[" + std::to_string(p) + "]";
     if (path.name.empty()) path.name = "path" + std::to_string(p);
     if (path.waypoints.empty()) {
-      throw InputError(field + ".waypoints", "path '" + path.name + "' has no waypoints");
+      throw InputError(field + ".waypoints",
+                       "path '" + ClientText(path.name) + "' has no waypoints");
     }
     for (size_t j = 0; j < path.waypoints.size(); ++j) {
       space.Validate(path.waypoints[j], field + ".waypoints[" + std::to_string(j) + "]");

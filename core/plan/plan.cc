@@ -15,6 +15,7 @@
 #include <cstdio>
 #include <string>
 
+#include "core/common/client_text.h"
 #include "core/common/error.h"
 #include "core/plan/baselines.h"
 #include "core/plan/ompl_bridge.h"
@@ -98,7 +99,7 @@ PlannerType ParsePlannerType(const std::string& name, const std::string& field) 
   if (name == "rrt-connect") return PlannerType::kRRTConnect;
   if (name == "prm-star") return PlannerType::kPRMStar;
   if (name == "lazy-prm") return PlannerType::kLazyPRM;
-  throw InputError(field, "unknown planner '" + name +
+  throw InputError(field, "unknown planner '" + ClientText(name) +
                               "' (known: prm, prm-cycles, prmstar, rrt, rrtconnect, lazyprm)");
 }
 

@@ -7,6 +7,7 @@
 #include <set>
 #include <utility>
 
+#include "core/common/client_text.h"
 #include "core/common/error.h"
 
 namespace hgraph {
@@ -488,7 +489,7 @@ Plane ParsePlane(const std::string& name, const std::string& field) {
   if (name == "xy") return Plane::kXY;
   if (name == "xz") return Plane::kXZ;
   if (name == "yz") return Plane::kYZ;
-  throw InputError(field, "plane must be xy, xz or yz, got '" + name + "'");
+  throw InputError(field, "plane must be xy, xz or yz, got '" + ClientText(name) + "'");
 }
 
 const char* PlaneName(Plane plane) {

@@ -1,10 +1,10 @@
 #include "core/scene/mesh_loader.h"
 
-#include <assimp/Importer.hpp>
 #include <assimp/config.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
+#include <assimp/Importer.hpp>
 #include <cctype>
 #include <cmath>
 #include <filesystem>
@@ -29,7 +29,8 @@ constexpr unsigned kPostProcess = aiProcess_RemoveComponent | aiProcess_Triangul
                                   aiProcess_JoinIdenticalVertices | aiProcess_SortByPType;
 
 void ConfigureImporter(Assimp::Importer& importer) {
-  importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+  importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE,
+                              aiPrimitiveType_POINT | aiPrimitiveType_LINE);
   importer.SetPropertyInteger(
       AI_CONFIG_PP_RVC_FLAGS,
       aiComponent_NORMALS | aiComponent_TANGENTS_AND_BITANGENTS | aiComponent_COLORS |
@@ -42,8 +43,8 @@ void ConfigureImporter(Assimp::Importer& importer) {
 
 // Counts what AppendNode would copy, stopping as soon as a limit is passed: node instancing lets
 // a small file name one large mesh many times.
-bool WithinLimits(const aiScene& scene, const aiNode& node, int depth, const MeshLoadOptions& limits,
-                  int64_t& vertices, int64_t& triangles) {
+bool WithinLimits(const aiScene& scene, const aiNode& node, int depth,
+                  const MeshLoadOptions& limits, int64_t& vertices, int64_t& triangles) {
   if (depth > 1000) return false;
   for (unsigned i = 0; i < node.mNumMeshes; ++i) {
     if (node.mMeshes[i] >= scene.mNumMeshes) return false;
@@ -189,7 +190,8 @@ std::shared_ptr<const Mesh> LoadMeshFile(const std::string& path, const MeshLoad
 }
 
 std::shared_ptr<const Mesh> LoadMeshBytes(const std::string& bytes, const std::string& format_hint,
-                                          const MeshLoadOptions& options, const std::string& field) {
+                                          const MeshLoadOptions& options,
+                                          const std::string& field) {
   CheckMeshScale(options, field);
   if (bytes.empty()) throw InputError(field, "mesh data is empty");
   const std::string hint =

@@ -15,9 +15,9 @@ void ValidateShape(const Shape& shape, const std::string& field) {
     case ShapeType::kBox:
       for (int k = 0; k < 3; ++k) {
         if (!Positive(shape.box_size[k])) {
-          throw InputError(field + ".box_size[" + std::to_string(k) + "]",
-                           "box side must be positive and finite, got " +
-                               std::to_string(shape.box_size[k]));
+          throw InputError(
+              field + ".box_size[" + std::to_string(k) + "]",
+              "box side must be positive and finite, got " + std::to_string(shape.box_size[k]));
         }
       }
       break;
@@ -40,10 +40,10 @@ void ValidateShape(const Shape& shape, const std::string& field) {
       break;
     case ShapeType::kMesh:
       if (shape.mesh == nullptr || shape.mesh->triangles.empty()) {
-        throw InputError(field + ".mesh", "mesh" +
-                                              (shape.source.empty() ? std::string()
-                                                                    : " '" + shape.source + "'") +
-                                              " has no triangles");
+        throw InputError(field + ".mesh",
+                         "mesh" +
+                             (shape.source.empty() ? std::string() : " '" + shape.source + "'") +
+                             " has no triangles");
       }
       {
         const int n = static_cast<int>(shape.mesh->vertices.size());
@@ -67,9 +67,10 @@ void ValidateScene(const Scene& scene) {
     const RobotBody& body = scene.robot[i];
     const std::string field = "robot[" + std::to_string(i) + "]";
     if (body.component < 0 || body.component >= scene.space.num_components()) {
-      throw InputError(field + ".component",
-                       "component " + std::to_string(body.component) + " is out of range (space has " +
-                           std::to_string(scene.space.num_components()) + " components)");
+      throw InputError(field + ".component", "component " + std::to_string(body.component) +
+                                                 " is out of range (space has " +
+                                                 std::to_string(scene.space.num_components()) +
+                                                 " components)");
     }
     if (!scene.space.CanDriveBody(body.component)) {
       throw InputError(field + ".component",

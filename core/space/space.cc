@@ -1,11 +1,10 @@
 #include "core/space/space.h"
 
-#include "core/common/limits.h"
-
 #include <cmath>
 #include <numbers>
 
 #include "core/common/error.h"
+#include "core/common/limits.h"
 
 namespace hgraph {
 namespace {
@@ -77,7 +76,8 @@ const char* ComponentTypeName(ComponentType type) {
 }
 
 Space::Space(std::vector<ComponentSpec> components) : components_(std::move(components)) {
-  if (components_.empty()) throw InputError("space.components", "a space needs at least one component");
+  if (components_.empty())
+    throw InputError("space.components", "a space needs at least one component");
   for (int i = 0; i < num_components(); ++i) {
     const std::string field = "space.components[" + std::to_string(i) + "]";
     ComponentSpec& c = components_[i];
@@ -88,24 +88,25 @@ Space::Space(std::vector<ComponentSpec> components) : components_(std::move(comp
     const int t = TranslationSize(c);
     if (t > 0) {
       if (c.lower.size() != t || c.upper.size() != t) {
-        throw InputError(field + ".lower",
-                         "needs " + std::to_string(t) + " lower and upper bounds, got " +
-                             std::to_string(c.lower.size()) + " and " +
-                             std::to_string(c.upper.size()));
+        throw InputError(field + ".lower", "needs " + std::to_string(t) +
+                                               " lower and upper bounds, got " +
+                                               std::to_string(c.lower.size()) + " and " +
+                                               std::to_string(c.upper.size()));
       }
       for (int k = 0; k < t; ++k) {
-        if (!std::isfinite(c.lower[k]) || !std::isfinite(c.upper[k]) || !(c.lower[k] < c.upper[k])) {
+        if (!std::isfinite(c.lower[k]) || !std::isfinite(c.upper[k]) ||
+            !(c.lower[k] < c.upper[k])) {
           throw InputError(field + ".upper[" + std::to_string(k) + "]",
                            "bounds must be finite with lower < upper, got [" +
-                               std::to_string(c.lower[k]) + ", " + std::to_string(c.upper[k]) + "]");
+                               std::to_string(c.lower[k]) + ", " + std::to_string(c.upper[k]) +
+                               "]");
         }
         // Larger bounds overflow the extent (upper - lower), and with it every sample count.
         for (const auto& [name, v] : {std::pair{".lower[", c.lower[k]}, {".upper[", c.upper[k]}}) {
           if (std::abs(v) > limits::kMaxCoordinate) {
             throw InputError(field + name + std::to_string(k) + "]",
                              "must be in [-" + limits::Num(limits::kMaxCoordinate) + ", " +
-                                 limits::Num(limits::kMaxCoordinate) + "], got " +
-                                 limits::Num(v));
+                                 limits::Num(limits::kMaxCoordinate) + "], got " + limits::Num(v));
           }
         }
       }

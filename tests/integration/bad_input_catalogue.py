@@ -120,6 +120,12 @@ def digest(data):
 # The catalogue: (name, call, input, expected code, message fragment). `call` is one of
 # put_scene, merge, merge_options, check, plan, upload, session, requery.
 
+def wrong_size(stub):
+    """The circles scene's digest as the server computes it, with size_bytes off by one."""
+    d = stub.PutScene(service_pb2.PutSceneRequest(scene=circles_scene()), timeout=TIMEOUT_S).digest
+    return scene_pb2.Digest(sha256=d.sha256, size_bytes=d.size_bytes + 1)
+
+
 def merge_req(**options):
     return dict(options=merge_pb2.MergeOptions(**options))
 
@@ -239,6 +245,12 @@ CASES = [
     ("plan_time_1e308", "plan", dict(time_per_path_s=1e308), C.INVALID_ARGUMENT, "time_per_path_s"),
     ("plan_time_nan", "plan", dict(time_per_path_s=float("nan")), C.INVALID_ARGUMENT, "time_per_path_s"),
     ("plan_planner_unknown", "plan", dict(planner="no-such-planner"), C.INVALID_ARGUMENT, "planner"),
+    # Client strings: escaped and cut in messages and logs; digests checked in full.
+    ("planner_name_100kB", "plan", dict(planner="p" * 100000), C.INVALID_ARGUMENT, "unknown planner"),
+    ("session_name_with_newline", "merge_session", "sessions/" + ("\nFORGED log line" + "x" * 32)[:32], C.INVALID_ARGUMENT, "\\nFORGED"),
+    ("session_name_100kB", "merge_session", "sessions/" + "a" * 100000, C.INVALID_ARGUMENT, "bytes, cut"),
+    ("hgraph_name_with_nul", "requery", "sessions/" + "0" * 32 + "/hgraphs/\x001", C.INVALID_ARGUMENT, "\\0"),
+    ("scene_digest_wrong_size", "session", lambda stub: wrong_size(stub), C.INVALID_ARGUMENT, "scene.size_bytes"),
     ("plan_start_1e308", "plan", dict(start=space_pb2.Configuration(values=[1e308, 1]), goal=space_pb2.Configuration(values=[70, 70])), C.INVALID_ARGUMENT, "start"),
 ]
 
@@ -358,11 +370,14 @@ def test_bad_input(server, stubs, case):
     stub, health, session = stubs
     if name == "zae_zip_bomb":
         value = mesh_scene(zae_bomb(), "zae")
+    if callable(value):
+        value = value(stub)
     got_code, message = outcome(stub, session, call, value)
     assert got_code == code, f"{name}: {got_code} {message!r}"
     assert fragment in message, f"{name}: {message!r}"
-    # Client strings are not echoed whole into messages.
+    # Client strings are not echoed whole into messages, nor raw.
     assert len(message) < 4000
+    assert "\n" not in message and "\0" not in message
     assert_still_serving(server, stub, health, session)
 
 

@@ -761,3 +761,43 @@ def test_an_idle_upload_is_aborted_and_its_bytes_released():
             assert c.upload_blob(blob, timeout=30).size_bytes == len(blob)
     finally:
         assert server.stop() == 0, "".join(server.log)
+
+
+def test_a_name_with_a_newline_cannot_forge_a_log_line(server):
+    forged = "\n2026-01-01 info FORGED"
+    name = "sessions/" + (forged + "x" * 32)[:32]
+    with server.client() as c:
+        # The raw stub: the client library would also put the name in call metadata, which
+        # refuses a newline on the client side.
+        with pytest.raises(grpc.RpcError) as e:
+            c.stub.GetSession(service_pb2.GetSessionRequest(name=name), timeout=10)
+    assert e.value.code() == grpc.StatusCode.INVALID_ARGUMENT
+    assert "\n" not in e.value.details()
+    assert "\\n2026-01-01 info FORGED" in e.value.details(), e.value.details()
+    for _ in range(100):
+        if any("\\n2026-01-01 info FORGED" in line for line in server.log):
+            break
+        time.sleep(0.05)
+    else:
+        raise AssertionError("the call was not logged:\n" + "".join(server.log[-5:]))
+    assert not any(line.startswith("2026-01-01 info FORGED") for line in server.log)
+
+
+def test_a_100_kb_name_gets_the_real_error(client):
+    with pytest.raises(hgraph_client.HgraphError) as e:
+        client.plan(count=1, planner="p" * 100000, time_per_path_s=0.1)
+    assert e.value.code == grpc.StatusCode.INVALID_ARGUMENT, e.value
+    message = str(e.value)
+    assert "planner" in message and "unknown planner" in message and "bytes, cut" in message
+    assert len(message) < 4000
+
+
+def test_a_scene_digest_with_a_wrong_size_is_refused_naming_the_field(server):
+    with server.client() as c:
+        digest = c.upload_scene(DATA / "scene.json")
+        wrong = scene_pb2.Digest(sha256=digest.sha256, size_bytes=digest.size_bytes + 1)
+        with pytest.raises(grpc.RpcError) as e:
+            c.stub.CreateSession(service_pb2.CreateSessionRequest(scene=wrong), timeout=30)
+        assert e.value.code() == grpc.StatusCode.INVALID_ARGUMENT
+        assert "scene.size_bytes" in e.value.details(), e.value.details()
+        assert c.create_session(digest).name.startswith("sessions/")
