@@ -17,8 +17,9 @@ packages=(
   clang libclang-rt-14-dev
 )
 if [ "${1:-}" != "--build" ]; then
-  # Tests: pictures (librsvg), nginx as the gRPC front (tests/deploy/affinity_test.py).
-  packages+=(librsvg2-bin nginx)
+  # Tests: pictures (librsvg), nginx as the gRPC front (tests/deploy/affinity_test.py),
+  # openssl for the certificates of tests/integration/test_security.py.
+  packages+=(librsvg2-bin nginx openssl)
   # kubectl renders deploy/ (tests/deploy); Debian's kubernetes-client provides it, but an
   # image may already carry kubectl from another package (they conflict): only when absent.
   command -v kubectl > /dev/null || packages+=(kubernetes-client)

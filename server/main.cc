@@ -10,6 +10,7 @@
 #include <signal.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
+#include <sys/stat.h>
 #include <tbb/info.h>
 
 #include <CLI/CLI.hpp>
@@ -20,9 +21,11 @@
 #include <string>
 
 #include "core/common/error.h"
+#include "server/auth.h"
 #include "server/mesh_importer.h"
 #include "server/metrics.h"
 #include "server/service.h"
+#include "server/tls.h"
 
 namespace {
 
@@ -46,6 +49,8 @@ struct Flags {
   int64_t mesh_import_memory_mb = 1024;
   int mesh_import_cpu_s = 20;
   double mesh_import_timeout_s = 30;
+  hgraph::server::TlsFiles tls;
+  std::string auth_tokens;
   double upload_idle_timeout_s = 30;
 };
 
@@ -119,6 +124,19 @@ int main(int argc, char** argv) {
                  "wall-clock limit of each mesh import (the call's deadline, if sooner, wins)")
       ->check(CLI::Range(0.1, 3600.0))
       ->capture_default_str();
+  app.add_option("--tls-cert", flags.tls.cert,
+                 "PEM certificate chain of the server: the gRPC port speaks TLS (with --tls-key)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--tls-key", flags.tls.key, "PEM private key (unencrypted) of --tls-cert")
+      ->check(CLI::ExistingFile);
+  app.add_option("--tls-client-ca", flags.tls.client_ca,
+                 "PEM CA certificate(s): mutual TLS, every client must present a certificate "
+                 "signed by one of them (needs --tls-cert)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--auth-tokens", flags.auth_tokens,
+                 "file of \"TOKEN TENANT\" lines: every call needs \"authorization: Bearer "
+                 "TOKEN\"; sessions and H-Graphs belong to the token's tenant (health stays open)")
+      ->check(CLI::ExistingFile);
   app.add_option("--upload-idle-timeout-s", flags.upload_idle_timeout_s,
                  "an UploadBlob stream that sends nothing for this long is aborted (ABORTED) and "
                  "its reserved bytes and admission slot released")
@@ -164,6 +182,22 @@ int main(int argc, char** argv) {
 
   try {
     hgraph::server::MeshImporter(options.mesh_import).CheckHelper();
+    // Checked before anything listens: a bad file is an error naming its flag.
+    const hgraph::server::TransportMode transport = hgraph::server::TransportModeOf(flags.tls);
+    const std::shared_ptr<grpc::ServerCredentials> credentials =
+        hgraph::server::MakeServerCredentials(flags.tls);
+    if (!flags.auth_tokens.empty()) {
+      const hgraph::server::TokenTable tokens = hgraph::server::TokenTable::Load(flags.auth_tokens);
+      // Counts only: the file's contents are secrets and never reach the log.
+      spdlog::info("--auth-tokens: {} tokens for {} tenants", tokens.size(),
+                   tokens.tenants().size());
+      struct stat file {};
+      if (::stat(flags.auth_tokens.c_str(), &file) == 0 && (file.st_mode & 077) != 0) {
+        spdlog::warn("--auth-tokens: {} is readable by other users (chmod 600 it)",
+                     flags.auth_tokens);
+      }
+      options.auth = hgraph::server::Authenticator(tokens);
+    }
     hgraph::server::Metrics metrics;
     hgraph::server::PathMergerService service(options, metrics);
 
@@ -171,13 +205,14 @@ int main(int argc, char** argv) {
     grpc::reflection::InitProtoReflectionServerBuilderPlugin();
     grpc::ServerBuilder builder;
     int port = 0;
-    builder.AddListeningPort(flags.listen, grpc::InsecureServerCredentials(), &port);
+    builder.AddListeningPort(flags.listen, credentials, &port);
     builder.SetMaxReceiveMessageSize(static_cast<int>(flags.max_message_bytes));
     builder.SetMaxSendMessageSize(static_cast<int>(flags.max_message_bytes));
     builder.RegisterService(&service);
     std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
     if (!server || port == 0) {
-      spdlog::error("cannot listen on {} (--listen)", flags.listen);
+      spdlog::error("cannot listen on {} (--listen) with {}", flags.listen,
+                    hgraph::server::TransportModeName(transport));
       return 2;
     }
     grpc::HealthCheckServiceInterface* health = server->GetHealthCheckService();
@@ -189,7 +224,9 @@ int main(int argc, char** argv) {
           std::make_unique<hgraph::server::MetricsHttpServer>(metrics, flags.metrics_listen);
     }
     const int metrics_port = metrics_http ? metrics_http->port() : 0;
-    spdlog::info("serving on port {} with {} worker threads; metrics on port {}", port,
+    spdlog::info("serving on port {} ({}, {}) with {} worker threads; metrics on port {}", port,
+                 hgraph::server::TransportModeName(transport),
+                 options.auth.enabled() ? "bearer tokens required" : "no authentication",
                  options.threads, metrics_port);
     // One machine-readable line on stdout for scripts and tests that start the server.
     std::printf("hgraph-server ready grpc_port=%d metrics_port=%d\n", port, metrics_port);

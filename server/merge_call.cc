@@ -22,6 +22,10 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
             const v1::MergePathsRequest* request)
       : service_(service), request_(request) {
     WireDeadline(context, token_);
+    if (grpc::Status auth = service->options().auth.Authenticate(*context, &tenant_); !auth.ok()) {
+      Complete(auth, false);
+      return;
+    }
     if (request->progress_interval_ms() < 0 ||
         request->progress_interval_ms() > limits::kMaxProgressIntervalMs) {
       Complete(grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
@@ -68,7 +72,7 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
 
   void Merge(v1::MergePathsResponse* out) {
     const v1::MergePathsRequest& request = *request_;
-    const v1::Session session = service_->sessions_.Touch(request.session(), "session");
+    const v1::Session session = service_->sessions_.Touch(request.session(), "session", tenant_);
     CheckBatchLimits(request.paths(), service_->options());
     if (request.paths().paths_size() == 0) throw InputError("paths.paths", "must not be empty");
     LoadedScene scene = service_->scenes_.Get(session.scene(), "session", token_);
@@ -129,9 +133,10 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
     try {
       // Deleted between AddHGraph and the Put: DeleteSession could not drop what was not yet
       // in the cache, so this call does.
-      service_->sessions_.Touch(session, "session");
+      // (Re-created since by another tenant: not this call's session any more either.)
+      service_->sessions_.Touch(session, "session", tenant_);
     } catch (const Error& e) {
-      if (e.code() != ErrorCode::kNotFound) throw;
+      if (e.code() != ErrorCode::kNotFound && e.code() != ErrorCode::kPermissionDenied) throw;
       service_->cache_.Erase(CacheKind::kHGraph, name);
       return;
     }
@@ -192,6 +197,7 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
   const v1::MergePathsRequest* request_;
   Clock::time_point started_ = service_->RecordStart("MergePaths");
   CancelToken token_;
+  std::string tenant_;  // the caller's (server/auth.h)
   std::chrono::milliseconds interval_{100};
 
   std::mutex mutex_;

@@ -23,6 +23,10 @@ class PathMergerService::PlanCall final : public grpc::ServerWriteReactor<v1::Pl
            const v1::PlanPathsRequest* request)
       : service_(service), request_(request) {
     WireDeadline(context, token_);
+    if (grpc::Status auth = service->options().auth.Authenticate(*context, &tenant_); !auth.ok()) {
+      Complete(auth);
+      return;
+    }
     if (!service_->pool().TrySubmit([this](WorkerPool::Slot& slot) { Work(slot); })) {
       Complete(Busy(service_->pool()));
     }
@@ -44,7 +48,7 @@ class PathMergerService::PlanCall final : public grpc::ServerWriteReactor<v1::Pl
 
   void Plan() {
     const v1::PlanPathsRequest& request = *request_;
-    const v1::Session session = service_->sessions_.Touch(request.session(), "session");
+    const v1::Session session = service_->sessions_.Touch(request.session(), "session", tenant_);
     if (request.count() < 0) {
       throw InputError("count",
                        "must be >= 0 (0 = one path), got " + std::to_string(request.count()));
@@ -136,6 +140,7 @@ class PathMergerService::PlanCall final : public grpc::ServerWriteReactor<v1::Pl
   const v1::PlanPathsRequest* request_;
   Clock::time_point started_ = service_->RecordStart("PlanPaths");
   CancelToken token_;
+  std::string tenant_;  // the caller's (server/auth.h)
   std::mutex mutex_;
   std::deque<v1::PlanPathsResponse> queue_;
   bool writing_ = false;

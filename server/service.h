@@ -12,6 +12,7 @@
 #include <string>
 
 #include "hgraph/v1/service.grpc.pb.h"
+#include "server/auth.h"
 #include "server/mesh_importer.h"
 #include "server/metrics.h"
 #include "server/resource_cache.h"
@@ -33,6 +34,7 @@ struct ServerOptions {
   std::chrono::milliseconds session_ttl{std::chrono::hours(1)};
   int progress_interval_ms = 100;
   MeshImportLimits mesh_import;  // how client mesh bytes are parsed (out of process)
+  Authenticator auth;            // --auth-tokens: who a call comes from (open without it)
   // An UploadBlob stream that sends nothing for this long is aborted (ExpireIdleUploads).
   std::chrono::milliseconds upload_idle_timeout{std::chrono::seconds(30)};
 };

@@ -54,6 +54,14 @@ std::string SessionRegistry::SessionOfHGraph(const std::string& hgraph, const st
   return session;
 }
 
+void SessionRegistry::CheckOwner(const std::string& name, const Record& record,
+                                 const std::string& field, const std::string& tenant) {
+  if (record.tenant != tenant) {
+    throw Error(ErrorCode::kPermissionDenied, field,
+                "session " + name + " belongs to another tenant than this call's token");
+  }
+}
+
 v1::Session SessionRegistry::ToProto(const std::string& name, const Record& record) const {
   v1::Session session;
   session.set_name(name);
@@ -64,12 +72,15 @@ v1::Session SessionRegistry::ToProto(const std::string& name, const Record& reco
   return session;
 }
 
-v1::Session SessionRegistry::Create(const v1::Digest& scene, const std::string& id) {
+v1::Session SessionRegistry::Create(const v1::Digest& scene, const std::string& id,
+                                    const std::string& tenant) {
   const std::string name = std::string(kPrefix) + (id.empty() ? RandomHex128() : id);
   if (!id.empty()) ValidateName(name, "session_id");
   std::lock_guard lock(mutex_);
-  if (auto it = sessions_.find(name);
-      it != sessions_.end() && it->second.expire_time > Clock::now()) {
+  auto it = sessions_.find(name);
+  // Even an expired session not yet swept: its H-Graphs are still held under its name.
+  if (it != sessions_.end()) CheckOwner(name, it->second, "session_id", tenant);
+  if (it != sessions_.end() && it->second.expire_time > Clock::now()) {
     if (it->second.scene.sha256() != scene.sha256() ||
         it->second.scene.size_bytes() != scene.size_bytes()) {
       throw Error(ErrorCode::kFailedPrecondition, "session_id",
@@ -86,13 +97,15 @@ v1::Session SessionRegistry::Create(const v1::Digest& scene, const std::string& 
   }
   const Clock::time_point now = Clock::now();
   Record& record = sessions_[name];
+  record.tenant = tenant;
   record.scene = scene;
   record.create_time = now;
   record.expire_time = now + ttl_;
   return ToProto(name, record);
 }
 
-v1::Session SessionRegistry::Touch(const std::string& name, const std::string& field) {
+v1::Session SessionRegistry::Touch(const std::string& name, const std::string& field,
+                                   const std::string& tenant) {
   ValidateName(name, field);
   std::lock_guard lock(mutex_);
   auto it = sessions_.find(name);
@@ -103,25 +116,29 @@ v1::Session SessionRegistry::Touch(const std::string& name, const std::string& f
                     " does not exist on this server (expired, deleted, or "
                     "created on another replica)");
   }
+  CheckOwner(name, it->second, field, tenant);
   it->second.expire_time = now + ttl_;
   return ToProto(name, it->second);
 }
 
-std::vector<v1::Session> SessionRegistry::List() const {
+std::vector<v1::Session> SessionRegistry::List(const std::string& tenant) const {
   std::lock_guard lock(mutex_);
   std::vector<v1::Session> out;
-  for (const auto& [name, record] : sessions_) out.push_back(ToProto(name, record));
+  for (const auto& [name, record] : sessions_) {
+    if (record.tenant == tenant) out.push_back(ToProto(name, record));
+  }
   return out;
 }
 
-std::vector<std::string> SessionRegistry::Delete(const std::string& name,
-                                                 const std::string& field) {
+std::vector<std::string> SessionRegistry::Delete(const std::string& name, const std::string& field,
+                                                 const std::string& tenant) {
   ValidateName(name, field);
   std::lock_guard lock(mutex_);
   auto it = sessions_.find(name);
   if (it == sessions_.end()) {
     throw Error(ErrorCode::kNotFound, field, "session " + name + " does not exist");
   }
+  CheckOwner(name, it->second, field, tenant);
   std::vector<std::string> hgraphs = std::move(it->second.hgraphs);
   sessions_.erase(it);
   return hgraphs;

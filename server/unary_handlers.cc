@@ -26,10 +26,16 @@ class PathMergerService::UnaryCall final : public grpc::ServerUnaryReactor {
             std::string session)
       : service_(service), method_(std::move(method)), session_(std::move(session)) {
     WireDeadline(context, token_);
+    auth_ = service->options().auth.Authenticate(*context, &tenant_);
   }
 
-  // `body` may throw hgraph::Error; it must not touch the call after returning.
+  // The caller's tenant (server/auth.h), for the session registry.
+  const std::string& tenant() const { return tenant_; }
+
+  // `body` may throw hgraph::Error; it must not touch the call after returning. An
+  // unauthenticated call finishes with UNAUTHENTICATED and runs no body.
   void Run(std::function<void(const CancelToken&)> body, bool on_worker) {
+    if (!auth_.ok()) return Complete(auth_);
     if (!on_worker) {
       Complete(Invoke([&] { body(token_); }, token_));
       return;
@@ -57,6 +63,8 @@ class PathMergerService::UnaryCall final : public grpc::ServerUnaryReactor {
   std::string session_;
   Clock::time_point started_ = service_->RecordStart(method_);
   CancelToken token_;
+  grpc::Status auth_;
+  std::string tenant_;
 };
 
 grpc::ServerUnaryReactor* PathMergerService::FindMissingBlobs(
@@ -99,7 +107,7 @@ grpc::ServerUnaryReactor* PathMergerService::CreateSession(grpc::CallbackServerC
         if (!request->has_scene()) throw InputError("scene", "must be set");
         // Loads the scene now (or finds it loaded), so that a missing scene is reported here.
         scenes_.Get(request->scene(), "scene", token);
-        *response = sessions_.Create(request->scene(), request->session_id());
+        *response = sessions_.Create(request->scene(), request->session_id(), call->tenant());
       },
       /*on_worker=*/true);
   return call;
@@ -109,8 +117,11 @@ grpc::ServerUnaryReactor* PathMergerService::GetSession(grpc::CallbackServerCont
                                                         const v1::GetSessionRequest* request,
                                                         v1::Session* response) {
   auto* call = new UnaryCall(this, context, "GetSession", request->name());
-  call->Run([=, this](const CancelToken&) { *response = sessions_.Touch(request->name(), "name"); },
-            /*on_worker=*/false);
+  call->Run(
+      [=, this](const CancelToken&) {
+        *response = sessions_.Touch(request->name(), "name", call->tenant());
+      },
+      /*on_worker=*/false);
   return call;
 }
 
@@ -120,7 +131,8 @@ grpc::ServerUnaryReactor* PathMergerService::ListSessions(grpc::CallbackServerCo
   auto* call = new UnaryCall(this, context, "ListSessions", "");
   call->Run(
       [=, this](const CancelToken&) {
-        for (v1::Session& s : sessions_.List()) *response->add_sessions() = std::move(s);
+        for (v1::Session& s : sessions_.List(call->tenant()))
+          *response->add_sessions() = std::move(s);
       },
       /*on_worker=*/false);
   return call;
@@ -131,7 +143,9 @@ grpc::ServerUnaryReactor* PathMergerService::DeleteSession(grpc::CallbackServerC
                                                            v1::DeleteSessionResponse*) {
   auto* call = new UnaryCall(this, context, "DeleteSession", request->name());
   call->Run(
-      [=, this](const CancelToken&) { DropHGraphs(sessions_.Delete(request->name(), "name")); },
+      [=, this](const CancelToken&) {
+        DropHGraphs(sessions_.Delete(request->name(), "name", call->tenant()));
+      },
       /*on_worker=*/false);
   return call;
 }
@@ -143,7 +157,7 @@ grpc::ServerUnaryReactor* PathMergerService::Requery(grpc::CallbackServerContext
   call->Run(
       [=, this](const CancelToken& token) {
         const std::string session = SessionRegistry::SessionOfHGraph(request->hgraph(), "hgraph");
-        sessions_.Touch(session, "hgraph");
+        sessions_.Touch(session, "hgraph", call->tenant());
         auto stored = cache_.Get<StoredHGraph>(CacheKind::kHGraph, request->hgraph());
         if (!stored) {
           throw Error(ErrorCode::kNotFound, "hgraph",
@@ -167,7 +181,7 @@ grpc::ServerUnaryReactor* PathMergerService::CheckPaths(grpc::CallbackServerCont
   auto* call = new UnaryCall(this, context, "CheckPaths", request->session());
   call->Run(
       [=, this](const CancelToken& token) {
-        const v1::Session session = sessions_.Touch(request->session(), "session");
+        const v1::Session session = sessions_.Touch(request->session(), "session", call->tenant());
         CheckBatchLimits(request->paths(), options_);
         LoadedScene scene = scenes_.Get(session.scene(), "session", token);
         token.ThrowIfStopped();

@@ -19,8 +19,15 @@ namespace hgraph::server {
 // worker pool.
 class PathMergerService::UploadCall final : public grpc::ServerReadReactor<v1::UploadBlobRequest> {
  public:
-  UploadCall(PathMergerService* service, v1::UploadBlobResponse* response)
+  UploadCall(PathMergerService* service, grpc::CallbackServerContext* context,
+             v1::UploadBlobResponse* response)
       : service_(service), response_(response) {
+    // Blobs are shared by digest, so the tenant is not kept; an unauthenticated stream is not read.
+    std::string tenant;
+    if (grpc::Status auth = service->options().auth.Authenticate(*context, &tenant); !auth.ok()) {
+      Complete(auth);
+      return;
+    }
     if (!service_->pool().TryHold()) {
       Complete(Busy(service_->pool()));
       return;
@@ -163,8 +170,8 @@ class PathMergerService::UploadCall final : public grpc::ServerReadReactor<v1::U
 };
 
 grpc::ServerReadReactor<v1::UploadBlobRequest>* PathMergerService::UploadBlob(
-    grpc::CallbackServerContext*, v1::UploadBlobResponse* response) {
-  return new UploadCall(this, response);
+    grpc::CallbackServerContext* context, v1::UploadBlobResponse* response) {
+  return new UploadCall(this, context, response);
 }
 
 void PathMergerService::AddUpload(UploadCall* call) {

@@ -22,11 +22,16 @@ inline constexpr int kExitBadInput = 2;  // any hgraph::Error, bad flags, unread
 // UNKNOWN, UNIMPLEMENTED, ...), as opposed to rejecting the request (exit 2).
 inline constexpr int kExitServerFailed = 3;
 
-// Flags every remote call takes (--server, --session, --timeout).
+// Flags every remote call takes (--server, --session, --timeout, and the connection's security:
+// --tls-ca, --tls-cert, --tls-key, --token; remote.h registers and applies them).
 struct RemoteOptions {
   std::string server;   // HOST:PORT
   std::string session;  // reuse this session instead of creating one
   double timeout_s = 0;
+  std::string tls_ca;    // PEM CA that signed the server's certificate: TLS
+  std::string tls_cert;  // PEM client certificate (mutual TLS), with tls_key
+  std::string tls_key;
+  std::string token;  // bearer token (or $HGRAPH_TOKEN): `authorization: Bearer <token>`
 };
 
 // How a subcommand's paths are to be checked (core/merge/path_check.h).

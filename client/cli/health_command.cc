@@ -56,12 +56,12 @@ int DecodeStatus(const std::string& bytes) {
   return status;
 }
 
-int CheckHealth(const std::string& server, const std::string& service, double timeout_s) {
-  auto channel = grpc::CreateChannel(server, grpc::InsecureChannelCredentials());
-  grpc::GenericStub stub(channel);
+int CheckHealth(const RemoteOptions& remote, const std::string& service) {
+  const std::string& server = remote.server;
+  grpc::GenericStub stub(OpenChannel(remote));
   grpc::ClientContext context;
-  context.set_deadline(std::chrono::system_clock::now() +
-                       std::chrono::milliseconds(static_cast<int64_t>(timeout_s * 1e3)));
+  // The health service needs no token, but a front (a proxy checking tokens) may.
+  PrepareCall(remote, &context);
   const std::string request = EncodeRequest(service);
   grpc::Slice slice(request);
   grpc::ByteBuffer request_buffer(&slice, 1);
@@ -102,15 +102,14 @@ int CheckHealth(const std::string& server, const std::string& service, double ti
 Subcommand AddHealthCommand(CLI::App& parent) {
   CLI::App* app = parent.add_subcommand(
       "health", "Ask hgraph-server's gRPC health service whether it serves (exit 0 if SERVING)");
-  auto server = std::make_shared<std::string>();
+  auto remote = std::make_shared<RemoteOptions>(RemoteOptions{.timeout_s = 5.0});
   auto service = std::make_shared<std::string>();
-  auto timeout_s = std::make_shared<double>(5.0);
-  app->add_option("--server", *server, "hgraph-server at HOST:PORT")->required();
+  app->add_option("--server", remote->server, "hgraph-server at HOST:PORT")->required();
   app->add_option("--service", *service,
                   "service name to ask about (empty = the whole server; or hgraph.v1.PathMerger)");
-  app->add_option("--timeout", *timeout_s, "Deadline, seconds")->capture_default_str();
-  return Subcommand{
-      app, [server, service, timeout_s] { return CheckHealth(*server, *service, *timeout_s); }};
+  app->add_option("--timeout", remote->timeout_s, "Deadline, seconds")->capture_default_str();
+  AddConnectionFlags(app, remote.get());
+  return Subcommand{app, [remote, service] { return CheckHealth(*remote, *service); }};
 }
 
 }  // namespace hgraph::cli

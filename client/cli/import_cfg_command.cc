@@ -41,7 +41,7 @@ int RunRemoteImportCfg(const ImportCfgFlags& f, const RemoteOptions& remote) {
   if (!f.out.empty()) RunImportCfg(f);
   v1::Scene scene;
   ParseJson(ToJson(ReadOmplAppProblem(f.cfg)), f.cfg, &scene);
-  RemoteClient client(remote.server, remote.timeout_s, remote.session);
+  RemoteClient client(remote);
   const v1::Digest digest =
       client.UploadScene(std::move(scene), std::filesystem::path(f.cfg).parent_path().string());
   const std::string session = client.OpenSession(digest, remote.session);

@@ -167,7 +167,7 @@ int RunLocal(const MergeFlags& f) {
 }
 
 int RunRemote(const MergeFlags& f, const RemoteOptions& remote) {
-  RemoteClient client(remote.server, remote.timeout_s, remote.session);
+  RemoteClient client(remote);
   const v1::Scene scene_proto = ReadSceneFile(f.scene);
   double resolution = 0;
   const Space space = SpaceFromProto(scene_proto.space(), "scene.space");

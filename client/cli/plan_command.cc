@@ -139,7 +139,7 @@ int RunRemote(const PlanFlags& f, const RemoteOptions& remote) {
   double resolution = 0;
   v1::PlanPathsRequest request = BuildRequest(f, scene_proto, &resolution);
   const Space space = SpaceFromProto(scene_proto.space(), "scene.space");
-  RemoteClient client(remote.server, remote.timeout_s, remote.session);
+  RemoteClient client(remote);
   v1::Scene uploaded;
   request.set_session(OpenSceneFile(client, f.scene, remote, &uploaded));
   PrintHeader();

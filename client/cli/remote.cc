@@ -1,10 +1,14 @@
 #include "client/cli/remote.h"
 
+#include <cerrno>
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -53,6 +57,17 @@ void Check(const grpc::Status& status, const char* method) {
   throw Error(FromGrpcCode(status.error_code()), "", message);
 }
 
+// A file named by a flag; Error(kNotFound, flag) when it cannot be read.
+std::string ReadFlagFile(const std::string& path, const char* flag) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    throw Error(ErrorCode::kNotFound, flag, "cannot read " + path + ": " + std::strerror(errno));
+  }
+  std::ostringstream bytes;
+  bytes << in.rdbuf();
+  return bytes.str();
+}
+
 v1::Digest DigestOf(const std::string& bytes) {
   v1::Digest digest;
   digest.set_sha256(Sha256Hex(bytes));
@@ -62,21 +77,66 @@ v1::Digest DigestOf(const std::string& bytes) {
 
 }  // namespace
 
-RemoteClient::RemoteClient(const std::string& target, double timeout_s, const std::string& session)
-    : timeout_s_(timeout_s), session_(session.empty() ? "sessions/" + RandomHex128() : session) {
+void AddConnectionFlags(CLI::App* app, RemoteOptions* remote) {
+  app->add_option("--tls-ca", remote->tls_ca,
+                  "With --server: TLS, verifying the server's certificate against this PEM CA");
+  app->add_option("--tls-cert", remote->tls_cert,
+                  "With --server: TLS with this PEM client certificate (mutual TLS; with "
+                  "--tls-key)");
+  app->add_option("--tls-key", remote->tls_key, "With --server: PEM private key of --tls-cert");
+  app->add_option("--token", remote->token,
+                  "With --server: bearer token sent as \"authorization: Bearer TOKEN\" (prefer "
+                  "$HGRAPH_TOKEN: a flag shows in the process list)")
+      ->envname("HGRAPH_TOKEN");
+}
+
+std::shared_ptr<grpc::Channel> OpenChannel(const RemoteOptions& remote) {
+  if (remote.tls_cert.empty() != remote.tls_key.empty()) {
+    throw InputError(remote.tls_cert.empty() ? "--tls-cert" : "--tls-key",
+                     "--tls-cert and --tls-key go together (the client certificate of mutual "
+                     "TLS and its key)");
+  }
   grpc::ChannelArguments args;
   args.SetMaxReceiveMessageSize(64 << 20);
   args.SetMaxSendMessageSize(64 << 20);
-  channel_ = grpc::CreateCustomChannel(target, grpc::InsecureChannelCredentials(), args);
-  stub_ = v1::PathMerger::NewStub(channel_);
+  std::shared_ptr<grpc::ChannelCredentials> credentials = grpc::InsecureChannelCredentials();
+  if (!remote.tls_ca.empty() || !remote.tls_cert.empty()) {
+    grpc::SslCredentialsOptions tls;
+    if (!remote.tls_ca.empty()) tls.pem_root_certs = ReadFlagFile(remote.tls_ca, "--tls-ca");
+    if (!remote.tls_cert.empty()) {
+      tls.pem_cert_chain = ReadFlagFile(remote.tls_cert, "--tls-cert");
+      tls.pem_private_key = ReadFlagFile(remote.tls_key, "--tls-key");
+    }
+    credentials = grpc::SslCredentials(tls);
+  }
+  return grpc::CreateCustomChannel(remote.server, credentials, args);
 }
+
+void PrepareCall(const RemoteOptions& remote, grpc::ClientContext* context) {
+  if (!remote.token.empty()) {
+    // Visible ASCII only: anything else cannot travel in a header (and would be a typo).
+    for (const char c : remote.token) {
+      if (c <= 0x20 || c >= 0x7f) {
+        throw InputError("--token", "must be visible ASCII characters without blanks");
+      }
+    }
+    context->AddMetadata("authorization", "Bearer " + remote.token);
+  }
+  if (remote.timeout_s > 0) {
+    context->set_deadline(std::chrono::system_clock::now() +
+                          std::chrono::milliseconds(static_cast<int64_t>(remote.timeout_s * 1e3)));
+  }
+}
+
+RemoteClient::RemoteClient(const RemoteOptions& remote)
+    : remote_(remote),
+      channel_(OpenChannel(remote)),
+      stub_(v1::PathMerger::NewStub(channel_)),
+      session_(remote.session.empty() ? "sessions/" + RandomHex128() : remote.session) {}
 
 void RemoteClient::Prepare(grpc::ClientContext* context) const {
   context->AddMetadata("x-hgraph-session", session_);
-  if (timeout_s_ > 0) {
-    context->set_deadline(std::chrono::system_clock::now() +
-                          std::chrono::milliseconds(static_cast<int64_t>(timeout_s_ * 1e3)));
-  }
+  PrepareCall(remote_, context);
 }
 
 v1::Digest RemoteClient::UploadScene(v1::Scene scene, const std::string& base_dir) {
@@ -217,8 +277,7 @@ std::string OpenSceneFile(RemoteClient& client, const std::string& scene_file,
 
 PathChecker RemotePathChecker(const RemoteOptions& remote, const std::string& scene_file) {
   struct State {
-    explicit State(const RemoteOptions& remote)
-        : client(remote.server, remote.timeout_s, remote.session) {}
+    explicit State(const RemoteOptions& remote) : client(remote) {}
     RemoteClient client;
     std::string session;
   };
@@ -256,6 +315,7 @@ Subcommand WithServer(Subcommand local) {
   app->add_option("--session", remote->session,
                   "With --server: reuse this session (sessions/<id>) instead of creating one");
   app->add_option("--timeout", remote->timeout_s, "With --server: deadline per call, seconds");
+  AddConnectionFlags(app, remote.get());
   auto run_local = std::move(local.run);
   auto run_remote = local.run_remote;
   local.run = [remote, run_local, run_remote] {

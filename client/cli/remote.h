@@ -17,15 +17,30 @@
 
 namespace hgraph::cli {
 
+// Registers --tls-ca, --tls-cert, --tls-key and --token (also read from $HGRAPH_TOKEN; the flag
+// wins) on a subcommand that talks to a server.
+void AddConnectionFlags(CLI::App* app, RemoteOptions* remote);
+
+// A channel to remote.server: TLS when --tls-ca or --tls-cert is given (the server's certificate
+// is verified against --tls-ca, or the system's roots without it), plaintext otherwise. Throws
+// InputError naming the flag for a lone --tls-cert or --tls-key and Error(kNotFound) for an
+// unreadable file.
+std::shared_ptr<grpc::Channel> OpenChannel(const RemoteOptions& remote);
+
+// Adds `authorization: Bearer <token>` when remote has a token (InputError("--token") if it
+// cannot travel in a header), and the deadline of remote.timeout_s when it is > 0.
+void PrepareCall(const RemoteOptions& remote, grpc::ClientContext* context);
+
 // One channel to a server. Failed calls throw hgraph::Error whose message starts with the
 // canonical code ("NOT_FOUND: session: ..."). Not thread safe; not copyable.
 class RemoteClient {
  public:
-  // timeout_s > 0 sets a deadline on every call. Every call carries `session` (or, when it is
-  // empty, the name of a new session chosen here: "sessions/<128 random bits>") in the
-  // `x-hgraph-session` metadata, from the first upload on, so that a load balancer hashing on it
-  // (deploy/nginx) sends the scene, the session and every later call to one replica.
-  RemoteClient(const std::string& target, double timeout_s, const std::string& session = "");
+  // The connection of `remote` (OpenChannel, PrepareCall). Every call carries remote.session
+  // (or, when it is empty, the name of a new session chosen here: "sessions/<128 random bits>")
+  // in the `x-hgraph-session` metadata, from the first upload on, so that a load balancer
+  // hashing on it (deploy/nginx) sends the scene, the session and every later call to one
+  // replica.
+  explicit RemoteClient(const RemoteOptions& remote);
   RemoteClient(const RemoteClient&) = delete;
   RemoteClient& operator=(const RemoteClient&) = delete;
 
@@ -50,9 +65,9 @@ class RemoteClient {
  private:
   void Prepare(grpc::ClientContext* context) const;
 
+  RemoteOptions remote_;
   std::shared_ptr<grpc::Channel> channel_;
   std::unique_ptr<v1::PathMerger::Stub> stub_;
-  double timeout_s_;
   std::string session_;
 };
 
@@ -63,8 +78,8 @@ class ServerFailure : public Error {
   using Error::Error;
 };
 
-// Adds --server, --session and --timeout to `local`'s app; with --server set, its run is
-// local.run_remote (which it requires), else the in-process run.
+// Adds --server, --session, --timeout and the connection flags to `local`'s app; with --server set,
+// its run is local.run_remote (which it requires), else the in-process run.
 Subcommand WithServer(Subcommand local);
 
 // Uploads the scene file (meshes relative to its folder) and opens remote.session or a new

@@ -25,10 +25,12 @@ Subcommand AddRequeryCommand(CLI::App& parent) {
   measure->Add(app);
   app->add_option("--out", *out, "Write the MergeResult JSON here");
   app->add_option("--timeout", flags->timeout_s, "Deadline, seconds");
+  AddConnectionFlags(app, flags.get());
   return Subcommand{app, [measure, flags, hgraph, out] {
                       // The H-Graph's session names the replica that holds it.
-                      RemoteClient client(flags->server, flags->timeout_s,
-                                          hgraph->substr(0, hgraph->find("/hgraphs/")));
+                      RemoteOptions remote = *flags;
+                      remote.session = hgraph->substr(0, hgraph->find("/hgraphs/"));
+                      RemoteClient client(remote);
                       v1::RequeryRequest request;
                       request.set_hgraph(*hgraph);
                       try {

@@ -20,6 +20,8 @@ enum class ErrorCode {
   kCancelled,           // the caller cancelled the work
   kDeadlineExceeded,    // the work ran past its deadline
   kResourceExhausted,   // a limit was hit
+  kUnauthenticated,     // the caller did not prove who it is (a missing or invalid token)
+  kPermissionDenied,    // the caller is known, but the resource belongs to someone else
 };
 
 // An error caused by the caller's input or by the outside world, never by a bug here.

@@ -10,7 +10,8 @@ namespace {
 TEST(StatusMapping, EveryEngineCodeSurvivesTheRoundTrip) {
   for (ErrorCode code :
        {ErrorCode::kInvalidArgument, ErrorCode::kNotFound, ErrorCode::kFailedPrecondition,
-        ErrorCode::kCancelled, ErrorCode::kDeadlineExceeded, ErrorCode::kResourceExhausted}) {
+        ErrorCode::kCancelled, ErrorCode::kDeadlineExceeded, ErrorCode::kResourceExhausted,
+        ErrorCode::kUnauthenticated, ErrorCode::kPermissionDenied}) {
     EXPECT_EQ(FromGrpcCode(ToGrpcCode(code)), code) << GrpcCodeName(ToGrpcCode(code));
   }
 }
@@ -22,6 +23,8 @@ TEST(StatusMapping, EngineCodesMapToTheirCanonicalCodes) {
   EXPECT_EQ(ToGrpcCode(ErrorCode::kCancelled), grpc::StatusCode::CANCELLED);
   EXPECT_EQ(ToGrpcCode(ErrorCode::kDeadlineExceeded), grpc::StatusCode::DEADLINE_EXCEEDED);
   EXPECT_EQ(ToGrpcCode(ErrorCode::kResourceExhausted), grpc::StatusCode::RESOURCE_EXHAUSTED);
+  EXPECT_EQ(ToGrpcCode(ErrorCode::kUnauthenticated), grpc::StatusCode::UNAUTHENTICATED);
+  EXPECT_EQ(ToGrpcCode(ErrorCode::kPermissionDenied), grpc::StatusCode::PERMISSION_DENIED);
 }
 
 TEST(StatusMapping, CodesWithoutAnEngineCounterpartAreFailures) {

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import os
 import pathlib
 import secrets
 import time
@@ -18,6 +19,11 @@ CHUNK_BYTES = 1 << 20
 
 # The request metadata a load balancer hashes on to keep a session on one replica (deploy/).
 SESSION_METADATA = "x-hgraph-session"
+
+# The bearer token's environment variable (the `token` argument wins), as for the CLI.
+TOKEN_ENV = "HGRAPH_TOKEN"
+
+PemSource = Union[str, pathlib.Path, bytes, None]
 
 # Codes after which a session call is worth repeating on a fresh session: the replica that held
 # the session is gone (UNAVAILABLE), or the call reached a replica that never saw it (NOT_FOUND).
@@ -140,6 +146,16 @@ def _digest(data: bytes) -> scene_pb2.Digest:
     return scene_pb2.Digest(sha256=hashlib.sha256(data).hexdigest(), size_bytes=len(data))
 
 
+def _pem(source: PemSource, name: str) -> Optional[bytes]:
+    """PEM bytes given as such, or read from a file path."""
+    if source is None or isinstance(source, bytes):
+        return source
+    try:
+        return pathlib.Path(source).read_bytes()
+    except OSError as e:
+        raise ValueError(f"{name}: cannot read {source}: {e.strerror}") from None
+
+
 def _raise(error: grpc.RpcError) -> None:
     raise HgraphError(error.code(), error.details()) from None
 
@@ -160,15 +176,41 @@ class Client:
     uploads the scene again (only the blobs the new replica lacks), re-creates the session under
     the same name and repeats the call. H-Graphs of the lost session are gone: a requery on one
     raises NOT_FOUND; merge again. `retries=0` turns recovery off.
+
+    Security: `tls_ca` (the PEM CA that signed the server's certificate; a path or the bytes)
+    turns TLS on; without it but with a client certificate the system's roots are trusted.
+    `tls_cert` and `tls_key` are the client certificate and its key for a server that requires
+    mutual TLS (--tls-client-ca). `token` (default: $HGRAPH_TOKEN) goes with every call as
+    `authorization: Bearer <token>` for a server with --auth-tokens; sessions then belong to the
+    token's tenant (token="" sends none, whatever the environment says). Over plaintext the token travels in the clear: use it with TLS (or on
+    loopback).
     """
 
     def __init__(self, target: str, *, max_message_bytes: int = 64 << 20, retries: int = 4,
-                 backoff_s: float = 0.2):
+                 backoff_s: float = 0.2, tls_ca: PemSource = None, tls_cert: PemSource = None,
+                 tls_key: PemSource = None, token: Optional[str] = None):
         self.target = target
-        self.channel = grpc.insecure_channel(target, options=[
+        options = [
             ("grpc.max_receive_message_length", max_message_bytes),
             ("grpc.max_send_message_length", max_message_bytes),
-        ])
+        ]
+        if (tls_cert is None) != (tls_key is None):
+            raise ValueError("tls_cert and tls_key go together (the client certificate of "
+                             "mutual TLS and its private key)")
+        if tls_ca is not None or tls_cert is not None:
+            credentials = grpc.ssl_channel_credentials(
+                root_certificates=_pem(tls_ca, "tls_ca"),
+                private_key=_pem(tls_key, "tls_key"),
+                certificate_chain=_pem(tls_cert, "tls_cert"))
+            self.channel = grpc.secure_channel(target, credentials, options=options)
+        else:
+            self.channel = grpc.insecure_channel(target, options=options)
+        # None: from the environment; "" sends no token even when the variable is set.
+        if token is None:
+            token = os.environ.get(TOKEN_ENV, "")
+        if any(c <= " " or c > "~" for c in token):
+            raise ValueError("token: must be visible ASCII characters without blanks")
+        self._auth = (("authorization", "Bearer " + token),) if token else ()
         self.stub = service_pb2_grpc.PathMergerStub(self.channel)
         self.session: Optional[str] = None
         self.session_name = "sessions/" + secrets.token_hex(16)
@@ -178,7 +220,7 @@ class Client:
         self._scene: Optional[tuple] = None  # (scene, base_dir) of the last upload_scene
 
     def _metadata(self, name: Optional[str] = None) -> tuple:
-        return ((SESSION_METADATA, name or self.session or self.session_name),)
+        return ((SESSION_METADATA, name or self.session or self.session_name),) + self._auth
 
     def _recovering(self, call: Callable[[], object], explicit_session: Optional[str]):
         """Runs call(); on a recoverable error restores the current session and runs it again."""
@@ -313,7 +355,8 @@ class Client:
 
     def list_sessions(self) -> list:
         try:
-            return list(self.stub.ListSessions(service_pb2.ListSessionsRequest()).sessions)
+            return list(self.stub.ListSessions(service_pb2.ListSessionsRequest(),
+                                               metadata=self._metadata()).sessions)
         except grpc.RpcError as e:
             _raise(e)
 
