@@ -15,7 +15,7 @@ import sys
 
 BEGIN = "<!-- BEGIN CLI REFERENCE (scripts/cli_reference.py --write) -->"
 END = "<!-- END CLI REFERENCE -->"
-SUBCOMMANDS = ["merge", "check", "plan", "render", "import-cfg", "requery"]
+SUBCOMMANDS = ["merge", "check", "plan", "render", "import-cfg", "requery", "add-paths"]
 
 
 def help_text(*cmd):

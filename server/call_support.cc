@@ -94,6 +94,25 @@ MergeResult QueryStored(PathMergerService::StoredHGraph& stored, const MeasureSp
   return result;
 }
 
+MergeResult AddToStored(PathMergerService::StoredHGraph& stored,
+                        const std::vector<InputPath>& paths, const MeasureSpec& measure,
+                        const CancelToken& token, int64_t* candidates_added) {
+  std::lock_guard adding(stored.adding_mutex);
+  std::unique_ptr<HybridizationSession> copy;
+  {
+    std::lock_guard lock(stored.mutex);
+    copy = std::make_unique<HybridizationSession>(stored.session->Clone());
+  }
+  *candidates_added = copy->AddPaths(paths, {}, token);
+  MergeResult result = copy->Query(measure, {}, token);
+  {
+    std::lock_guard lock(stored.mutex);
+    std::swap(stored.session, copy);
+    ++stored.version;
+  }
+  return result;
+}
+
 Clock::time_point PathMergerService::RecordStart(const std::string& method) {
   families_.rpc_started.Increment(
       {{"grpc_type", CallType(method)}, {"grpc_service", kService}, {"grpc_method", method}});

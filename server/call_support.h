@@ -40,7 +40,8 @@ void CheckBatchLimits(const v1::PathSet& paths, const ServerOptions& options);
 
 // An H-Graph kept for re-queries, with the local planner its edges were checked with.
 struct PathMergerService::StoredHGraph {
-  std::mutex mutex;  // guards session and version
+  std::mutex mutex;         // guards session and version
+  std::mutex adding_mutex;  // held by an AddPaths for its whole call: additions never race
   LoadedScene scene;
   std::unique_ptr<LocalPlanner> planner;
   std::unique_ptr<HybridizationSession> session;
@@ -54,5 +55,12 @@ struct PathMergerService::StoredHGraph {
 // lock for every other caller.
 MergeResult QueryStored(PathMergerService::StoredHGraph& stored, const MeasureSpec& measure,
                         const ProgressCallback& progress, const CancelToken& token);
+
+// Adds paths to a stored H-Graph and searches it (AddPaths), on a copy as QueryStored does; the
+// copy replaces the stored session whatever queries did meanwhile (their checks are dropped,
+// the added paths never are). Returns the bridge candidates added through `candidates_added`.
+MergeResult AddToStored(PathMergerService::StoredHGraph& stored,
+                        const std::vector<InputPath>& paths, const MeasureSpec& measure,
+                        const CancelToken& token, int64_t* candidates_added);
 
 }  // namespace hgraph::server

@@ -70,6 +70,9 @@ class PathMergerService final : public v1::PathMerger::CallbackService {
   grpc::ServerUnaryReactor* Requery(grpc::CallbackServerContext* context,
                                     const v1::RequeryRequest* request,
                                     v1::RequeryResponse* response) override;
+  grpc::ServerUnaryReactor* AddPaths(grpc::CallbackServerContext* context,
+                                     const v1::AddPathsRequest* request,
+                                     v1::AddPathsResponse* response) override;
   grpc::ServerWriteReactor<v1::PlanPathsResponse>* PlanPaths(
       grpc::CallbackServerContext* context, const v1::PlanPathsRequest* request) override;
   grpc::ServerUnaryReactor* CheckPaths(grpc::CallbackServerContext* context,

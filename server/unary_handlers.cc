@@ -175,6 +175,56 @@ grpc::ServerUnaryReactor* PathMergerService::Requery(grpc::CallbackServerContext
   return call;
 }
 
+grpc::ServerUnaryReactor* PathMergerService::AddPaths(grpc::CallbackServerContext* context,
+                                                      const v1::AddPathsRequest* request,
+                                                      v1::AddPathsResponse* response) {
+  auto* call = new UnaryCall(this, context, "AddPaths", request->hgraph());
+  call->Run(
+      [=, this](const CancelToken& token) {
+        const std::string session = SessionRegistry::SessionOfHGraph(request->hgraph(), "hgraph");
+        sessions_.Touch(session, "hgraph", call->tenant());
+        CheckBatchLimits(request->paths(), options_);
+        const MeasureSpec measure = MeasureFromProto(request->measure());
+        auto stored = cache_.Get<StoredHGraph>(CacheKind::kHGraph, request->hgraph());
+        if (!stored) {
+          throw Error(ErrorCode::kNotFound, "hgraph",
+                      ClientText(request->hgraph()) +
+                          " is not held by this server (evicted under the memory budget, or "
+                          "never built here); merge the paths again");
+        }
+        int held = 0;
+        {
+          std::lock_guard lock(stored->mutex);
+          held = stored->session->graph().num_paths();
+        }
+        if (held + request->paths().paths_size() > options_.max_paths) {
+          throw Error(ErrorCode::kResourceExhausted, "paths.paths",
+                      std::to_string(request->paths().paths_size()) + " more paths would give " +
+                          ClientText(request->hgraph()) + " " +
+                          std::to_string(held + request->paths().paths_size()) +
+                          " inputs, over the limit of " + std::to_string(options_.max_paths) +
+                          " (--max-paths)");
+        }
+        const std::vector<InputPath> paths = PathsFromProto(request->paths());
+        int64_t added = 0;
+        MergeResult result;
+        try {
+          result = AddToStored(*stored, paths, measure, token, &added);
+        } catch (const Error& e) {
+          // The engine names the batch's own paths ("paths[i]..."), the request nests them.
+          if (e.field() != "paths" && e.field().rfind("paths[", 0) != 0) throw;
+          throw Error(e.code(), "paths." + e.field(),
+                      std::string(e.what()).substr(e.field().size() + 2));
+        }
+        *response->mutable_result() = MergeResultToProto(result);
+        response->set_hgraph(request->hgraph());
+        response->set_candidates_added(added);
+        RecordMerge("AddPaths", response->result());
+      },
+      /*on_worker=*/true);
+  return call;
+}
+
 grpc::ServerUnaryReactor* PathMergerService::CheckPaths(grpc::CallbackServerContext* context,
                                                         const v1::CheckPathsRequest* request,
                                                         v1::CheckPathsResponse* response) {

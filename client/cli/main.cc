@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
       WithServer(AddRenderCommand(app)),
       WithServer(AddImportCfgCommand(app)),
       AddRequeryCommand(app),
+      AddAddPathsCommand(app),
       AddHealthCommand(app),
   };
 

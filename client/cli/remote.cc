@@ -240,6 +240,14 @@ v1::RequeryResponse RemoteClient::Requery(const v1::RequeryRequest& request) {
   return response;
 }
 
+v1::AddPathsResponse RemoteClient::AddPaths(const v1::AddPathsRequest& request) {
+  grpc::ClientContext context;
+  Prepare(&context);
+  v1::AddPathsResponse response;
+  Check(stub_->AddPaths(&context, request, &response), "AddPaths");
+  return response;
+}
+
 v1::CheckPathsResponse RemoteClient::CheckPaths(const v1::CheckPathsRequest& request) {
   grpc::ClientContext context;
   Prepare(&context);

@@ -57,6 +57,7 @@ class RemoteClient {
   v1::MergePathsResponse Merge(v1::MergePathsRequest request,
                                const std::function<void(const v1::MergeProgress&)>& on_progress);
   v1::RequeryResponse Requery(const v1::RequeryRequest& request);
+  v1::AddPathsResponse AddPaths(const v1::AddPathsRequest& request);
   v1::CheckPathsResponse CheckPaths(const v1::CheckPathsRequest& request);
   // Calls on_path for each path as it arrives.
   void Plan(const v1::PlanPathsRequest& request,
@@ -97,6 +98,8 @@ void PrintRemoteResult(const v1::MergeResult& result, const std::string& hgraph)
 
 // `hgraph requery --server HOST:PORT --hgraph NAME --measure M`.
 Subcommand AddRequeryCommand(CLI::App& parent);
+// `hgraph add-paths --server HOST:PORT --hgraph NAME --scene S --paths P` (requery_command.cc).
+Subcommand AddAddPathsCommand(CLI::App& parent);
 // `hgraph health --server ADDR` (health_command.cc).
 Subcommand AddHealthCommand(CLI::App& parent);
 

@@ -203,6 +203,8 @@ CASES = [
     ("merge_session_huge_name", "merge_session", "s" * 100000, C.INVALID_ARGUMENT, "session"),
     ("requery_malformed_hgraph", "requery", "sessions/x/hgraphs/y", C.INVALID_ARGUMENT, "hgraph"),
     ("requery_unknown_hgraph", "requery", "sessions/" + "0" * 32 + "/hgraphs/1", C.NOT_FOUND, "hgraph"),
+    ("add_paths_malformed_hgraph", "add_paths", "sessions/x/hgraphs/y", C.INVALID_ARGUMENT, "hgraph"),
+    ("add_paths_unknown_hgraph", "add_paths", "sessions/" + "0" * 32 + "/hgraphs/1", C.NOT_FOUND, "hgraph"),
     # Waypoints.
     ("waypoint_1e308", "merge", dict(paths=paths_with(lambda p: p.paths[0].waypoints[1].values.__setitem__(0, 1e308))), C.INVALID_ARGUMENT, "paths.paths[0].waypoints[1][0]"),
     ("waypoint_beyond_range", "merge", dict(paths=paths_with(lambda p: p.paths[1].waypoints[2].values.__setitem__(1, -5e9))), C.INVALID_ARGUMENT, "paths.paths[1].waypoints[2][1]"),
@@ -326,6 +328,8 @@ def run(stub, session, call, value):
         stub.CreateSession(service_pb2.CreateSessionRequest(scene=value), timeout=TIMEOUT_S)
     elif call == "requery":
         stub.Requery(service_pb2.RequeryRequest(hgraph=value), timeout=TIMEOUT_S)
+    elif call == "add_paths":
+        stub.AddPaths(service_pb2.AddPathsRequest(hgraph=value, paths=paths()), timeout=TIMEOUT_S)
     else:
         raise AssertionError(call)
 

@@ -5,6 +5,7 @@ Run through CTest (which sets the environment), or by hand:
     HGRAPH_SERVER=build/hgraph-server HGRAPH_CLI=build/hgraph \
     PYTHONPATH=client/python:build/python /usr/bin/python3 -m pytest tests/integration
 """
+import json
 import os
 import pathlib
 import re
@@ -179,6 +180,39 @@ def test_lazy_requery_profiles_only_what_its_search_wants(client):
     assert lazy.quality.length == pytest.approx(eager.quality.length, rel=1e-9)
     assert 0 < lazy.stats.distance_queries < eager.stats.distance_queries
     assert lazy.stats.node_clearances > 0
+
+
+def test_add_paths_grows_the_stored_hgraph(client):
+    paths = [[list(q.values) for q in p.waypoints] for p in input_paths().paths]
+    first = client.merge([paths[0]], variant="all-pairs", optimize_ms=0)
+    added = client.add_paths(first.hgraph, [paths[1]])
+    assert added.hgraph == first.hgraph
+    assert added.candidates_added > 0
+    grown = added.result
+    assert len(grown.inputs) == 2
+    assert grown.objective <= first.result.objective + 1e-9
+    assert grown.stats.edges_reused > 0  # what the first merge checked is not checked again
+    # All-pairs either way: the same candidates as merging both at once, so the same optimum.
+    together = client.merge(paths, variant="all-pairs", optimize_ms=0)
+    assert grown.objective == pytest.approx(together.result.objective, rel=1e-9)
+    # The paths stay in the H-Graph: a requery sees both inputs.
+    assert len(client.requery(first.hgraph, "bottleneck-clearance").inputs) == 2
+    # A path that misses the start is refused, named as the request holds it, and the H-Graph
+    # is unchanged; so is a batch past --max-paths in all.
+    stray = [list(q) for q in paths[1]]
+    stray[0][0] += 1.0
+    with pytest.raises(hgraph_client.HgraphError) as e:
+        client.add_paths(first.hgraph, [paths[1], stray])
+    assert e.value.code == grpc.StatusCode.INVALID_ARGUMENT
+    assert e.value.message.startswith("paths.paths[1].waypoints[0]: "), e.value.message
+    with pytest.raises(hgraph_client.HgraphError) as e:
+        client.add_paths(first.hgraph, [paths[1]] * 7)
+    assert e.value.code == grpc.StatusCode.RESOURCE_EXHAUSTED
+    assert "--max-paths" in e.value.message
+    assert len(client.requery(first.hgraph, "length").inputs) == 2
+    with pytest.raises(hgraph_client.HgraphError) as e:
+        client.add_paths(client.session + "/hgraphs/999", [paths[1]])
+    assert e.value.code == grpc.StatusCode.NOT_FOUND and "hgraph" in e.value.message
 
 
 def test_upload_chunked_blob_and_mesh_scene(server):
@@ -532,6 +566,20 @@ def test_cli_remote_merge_requery_plan(server, tmp_path):
     missing = run_cli("requery", "--server", server.target, "--hgraph",
                       "sessions/" + "0" * 32 + "/hgraphs/1")
     assert missing.returncode == 2 and "NOT_FOUND" in missing.stderr
+
+    one = tmp_path / "one.txt"
+    chunks = (DATA / "paths.txt").read_text().split("\n\n")
+    one.write_text([c for c in chunks if c.strip() and not c.lstrip().startswith("#")][0] + "\n")
+    first = run_cli("merge", "--server", server.target, "--scene", str(DATA / "scene.json"),
+                    "--paths", str(one))
+    assert first.returncode == 0, first.stderr
+    grown_name = re.search(r"^hgraph (\S+)$", first.stdout, re.M).group(1)
+    grown = run_cli("add-paths", "--server", server.target, "--hgraph", grown_name,
+                    "--scene", str(DATA / "scene.json"), "--paths", str(DATA / "paths.txt"),
+                    "--out", str(tmp_path / "grown.json"))
+    assert grown.returncode == 0, grown.stderr
+    assert len(json.loads((tmp_path / "grown.json").read_text())["inputs"]) == 3
+    assert ("hgraph " + grown_name) in grown.stdout
 
     planned = run_cli("plan", "--server", server.target, "--scene",
                       str(ROOT / "scenes" / "circles" / "scene.json"), "--count", "2",

@@ -446,6 +446,19 @@ class Client:
         except grpc.RpcError as e:
             _raise(e)
 
+    def add_paths(self, hgraph: str, paths, measure: Union[str, merge_pb2.Measure] = "length", *,
+                  k: Optional[float] = None, safety: Optional[float] = None,
+                  timeout: Optional[float] = None) -> service_pb2.AddPathsResponse:
+        """Adds input paths to a stored H-Graph (edges checked before are kept), then searches
+        it under `measure` (AddPaths). The response carries the result, the H-Graph's name and
+        the bridge candidates the new paths brought."""
+        try:
+            return self.stub.AddPaths(service_pb2.AddPathsRequest(
+                hgraph=hgraph, paths=make_paths(paths), measure=make_measure(measure, k, safety)),
+                timeout=timeout, metadata=self._metadata(hgraph.split("/hgraphs/", 1)[0]))
+        except grpc.RpcError as e:
+            _raise(e)
+
     def check(self, paths, *, session: Optional[str] = None,
               resolution: Optional[float] = None, k: Optional[float] = None,
               sampled: bool = False, timeout: Optional[float] = None) -> CheckOutcome:
