@@ -105,6 +105,10 @@ class PathMergerService final : public v1::PathMerger::CallbackService {
   // Counts the call as started (grpc_server_started_total) and returns its start time.
   std::chrono::steady_clock::time_point RecordStart(const std::string& method);
   void DropHGraphs(const std::vector<std::string>& names);
+  // The stored H-Graph `name` ("sessions/<id>/hgraphs/<n>", field "hgraph") for `tenant`: its
+  // session touched (NOT_FOUND / PERMISSION_DENIED as SessionRegistry::Touch), NOT_FOUND if the
+  // cache no longer holds it.
+  std::shared_ptr<StoredHGraph> HeldHGraph(const std::string& name, const std::string& tenant);
   void AddUpload(UploadCall* call);
   void RemoveUpload(UploadCall* call);
   void RecordMerge(const std::string& method, const v1::MergeResult& result);

@@ -150,21 +150,26 @@ grpc::ServerUnaryReactor* PathMergerService::DeleteSession(grpc::CallbackServerC
   return call;
 }
 
+std::shared_ptr<PathMergerService::StoredHGraph> PathMergerService::HeldHGraph(
+    const std::string& name, const std::string& tenant) {
+  sessions_.Touch(SessionRegistry::SessionOfHGraph(name, "hgraph"), "hgraph", tenant);
+  auto stored = cache_.Get<StoredHGraph>(CacheKind::kHGraph, name);
+  if (!stored) {
+    throw Error(ErrorCode::kNotFound, "hgraph",
+                ClientText(name) +
+                    " is not held by this server (evicted under the memory budget, or never "
+                    "built here); merge the paths again");
+  }
+  return stored;
+}
+
 grpc::ServerUnaryReactor* PathMergerService::Requery(grpc::CallbackServerContext* context,
                                                      const v1::RequeryRequest* request,
                                                      v1::RequeryResponse* response) {
   auto* call = new UnaryCall(this, context, "Requery", request->hgraph());
   call->Run(
       [=, this](const CancelToken& token) {
-        const std::string session = SessionRegistry::SessionOfHGraph(request->hgraph(), "hgraph");
-        sessions_.Touch(session, "hgraph", call->tenant());
-        auto stored = cache_.Get<StoredHGraph>(CacheKind::kHGraph, request->hgraph());
-        if (!stored) {
-          throw Error(ErrorCode::kNotFound, "hgraph",
-                      ClientText(request->hgraph()) +
-                          " is not held by this server (evicted under the memory budget, or "
-                          "never built here); merge the paths again");
-        }
+        const auto stored = HeldHGraph(request->hgraph(), call->tenant());
         const MeasureSpec measure = MeasureFromProto(request->measure());
         const MergeResult result = QueryStored(*stored, measure, {}, token);
         *response->mutable_result() = MergeResultToProto(result);
@@ -181,17 +186,9 @@ grpc::ServerUnaryReactor* PathMergerService::AddPaths(grpc::CallbackServerContex
   auto* call = new UnaryCall(this, context, "AddPaths", request->hgraph());
   call->Run(
       [=, this](const CancelToken& token) {
-        const std::string session = SessionRegistry::SessionOfHGraph(request->hgraph(), "hgraph");
-        sessions_.Touch(session, "hgraph", call->tenant());
+        const auto stored = HeldHGraph(request->hgraph(), call->tenant());
         CheckBatchLimits(request->paths(), options_);
         const MeasureSpec measure = MeasureFromProto(request->measure());
-        auto stored = cache_.Get<StoredHGraph>(CacheKind::kHGraph, request->hgraph());
-        if (!stored) {
-          throw Error(ErrorCode::kNotFound, "hgraph",
-                      ClientText(request->hgraph()) +
-                          " is not held by this server (evicted under the memory budget, or "
-                          "never built here); merge the paths again");
-        }
         int held = 0;
         {
           std::lock_guard lock(stored->mutex);

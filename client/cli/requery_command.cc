@@ -13,39 +13,60 @@
 #include "core/common/error.h"
 
 namespace hgraph::cli {
+namespace {
+
+// The flags of a call on a stored H-Graph: where it is, the measure, where the result goes.
+struct StoredHGraphFlags {
+  RemoteOptions remote;
+  std::string hgraph;
+  std::string out;
+  MeasureFlags measure;
+
+  void Add(CLI::App* app) {
+    app->add_option("--server", remote.server, "hgraph-server at HOST:PORT")->required();
+    app->add_option("--hgraph", hgraph, "H-Graph name from a merge (sessions/<id>/hgraphs/<n>)")
+        ->required();
+    measure.Add(app);
+    app->add_option("--out", out, "Write the MergeResult JSON here");
+    app->add_option("--timeout", remote.timeout_s, "Deadline, seconds");
+    AddConnectionFlags(app, &remote);
+  }
+  // The H-Graph's session names the replica that holds it.
+  RemoteOptions Remote() const {
+    RemoteOptions r = remote;
+    r.session = hgraph.substr(0, hgraph.find("/hgraphs/"));
+    return r;
+  }
+  v1::Measure Measure() const {
+    try {
+      return measure.ToProto();
+    } catch (const Error& e) {
+      RethrowWithFlag(e, {{"measure.k", "--k"}, {"measure.safety", "--safety"}});
+    }
+  }
+  int Finish(const v1::MergeResult& result, const std::string& name) const {
+    if (!out.empty()) WriteTextFile(out, ToJson(result));
+    PrintRemoteResult(result, name);
+    return kExitOk;
+  }
+};
+
+}  // namespace
 
 Subcommand AddRequeryCommand(CLI::App& parent) {
   CLI::App* app =
       parent.add_subcommand("requery",
                             "Search an H-Graph kept by hgraph-server under another measure (no new "
                             "collision checks where stored clearance profiles suffice)");
-  auto flags = std::make_shared<RemoteOptions>();
-  auto hgraph = std::make_shared<std::string>();
-  auto out = std::make_shared<std::string>();
-  app->add_option("--server", flags->server, "hgraph-server at HOST:PORT")->required();
-  app->add_option("--hgraph", *hgraph, "H-Graph name from a merge (sessions/<id>/hgraphs/<n>)")
-      ->required();
-  auto measure = std::make_shared<MeasureFlags>();
-  measure->Add(app);
-  app->add_option("--out", *out, "Write the MergeResult JSON here");
-  app->add_option("--timeout", flags->timeout_s, "Deadline, seconds");
-  AddConnectionFlags(app, flags.get());
-  return Subcommand{app, [measure, flags, hgraph, out] {
-                      // The H-Graph's session names the replica that holds it.
-                      RemoteOptions remote = *flags;
-                      remote.session = hgraph->substr(0, hgraph->find("/hgraphs/"));
-                      RemoteClient client(remote);
+  auto f = std::make_shared<StoredHGraphFlags>();
+  f->Add(app);
+  return Subcommand{app, [f] {
+                      RemoteClient client(f->Remote());
                       v1::RequeryRequest request;
-                      request.set_hgraph(*hgraph);
-                      try {
-                        *request.mutable_measure() = measure->ToProto();
-                      } catch (const Error& e) {
-                        RethrowWithFlag(e, {{"measure.k", "--k"}, {"measure.safety", "--safety"}});
-                      }
+                      request.set_hgraph(f->hgraph);
+                      *request.mutable_measure() = f->Measure();
                       const v1::RequeryResponse response = client.Requery(request);
-                      if (!out->empty()) WriteTextFile(*out, ToJson(response.result()));
-                      PrintRemoteResult(response.result(), response.hgraph());
-                      return kExitOk;
+                      return f->Finish(response.result(), response.hgraph());
                     }};
 }
 
@@ -54,14 +75,9 @@ Subcommand AddAddPathsCommand(CLI::App& parent) {
       "add-paths",
       "Add input paths to an H-Graph kept by hgraph-server (edges checked before are kept), then "
       "search it under a measure");
-  auto flags = std::make_shared<RemoteOptions>();
-  auto hgraph = std::make_shared<std::string>();
+  auto f = std::make_shared<StoredHGraphFlags>();
   auto scene = std::make_shared<std::string>();
   auto paths = std::make_shared<std::string>();
-  auto out = std::make_shared<std::string>();
-  app->add_option("--server", flags->server, "hgraph-server at HOST:PORT")->required();
-  app->add_option("--hgraph", *hgraph, "H-Graph name from a merge (sessions/<id>/hgraphs/<n>)")
-      ->required();
   app->add_option("--scene", *scene,
                   "Scene JSON or OMPL.app problem (.cfg) of the H-Graph: reads OMPL text paths")
       ->required();
@@ -69,32 +85,20 @@ Subcommand AddAddPathsCommand(CLI::App& parent) {
                   "Paths to add: PathSet JSON, or OMPL text (one configuration per line, blank "
                   "lines between paths)")
       ->required();
-  auto measure = std::make_shared<MeasureFlags>();
-  measure->Add(app);
-  app->add_option("--out", *out, "Write the MergeResult JSON here");
-  app->add_option("--timeout", flags->timeout_s, "Deadline, seconds");
-  AddConnectionFlags(app, flags.get());
-  return Subcommand{app, [measure, flags, hgraph, scene, paths, out] {
+  f->Add(app);
+  return Subcommand{app, [f, scene, paths] {
                       const Space space =
                           SpaceFromProto(ReadSceneFile(*scene).space(), "scene.space");
                       const std::vector<InputPath> added = LoadPathsFile(*paths, space);
                       if (added.empty())
                         throw InputError("--paths", "no paths in '" + *paths + "'");
-                      RemoteOptions remote = *flags;
-                      remote.session = hgraph->substr(0, hgraph->find("/hgraphs/"));
-                      RemoteClient client(remote);
+                      RemoteClient client(f->Remote());
                       v1::AddPathsRequest request;
-                      request.set_hgraph(*hgraph);
+                      request.set_hgraph(f->hgraph);
                       *request.mutable_paths() = PathsToProto(added);
-                      try {
-                        *request.mutable_measure() = measure->ToProto();
-                      } catch (const Error& e) {
-                        RethrowWithFlag(e, {{"measure.k", "--k"}, {"measure.safety", "--safety"}});
-                      }
+                      *request.mutable_measure() = f->Measure();
                       const v1::AddPathsResponse response = client.AddPaths(request);
-                      if (!out->empty()) WriteTextFile(*out, ToJson(response.result()));
-                      PrintRemoteResult(response.result(), response.hgraph());
-                      return kExitOk;
+                      return f->Finish(response.result(), response.hgraph());
                     }};
 }
 
