@@ -55,6 +55,18 @@ struct LocalPlanner::Impl {
 
 namespace {
 
+// How far any point of the robot can move along the straight motion from a to b: per body, its
+// component's translation plus its radius times the component's rotation angle.
+double RobotMotionBound(const Space& space, const std::vector<int>& body_component,
+                        const std::vector<double>& body_radius, const Config& a, const Config& b) {
+  double bound = 0;
+  for (size_t i = 0; i < body_component.size(); ++i) {
+    const int c = body_component[i];
+    bound += space.TranslationDistance(c, a, b) + body_radius[i] * space.RotationAngle(c, a, b);
+  }
+  return bound;
+}
+
 // One CheckEdge call: the motion, the thread's context and what it has found so far.
 class EdgeCheck {
  public:
@@ -70,15 +82,8 @@ class EdgeCheck {
 
   Config At(double t) const { return space_.Interpolate(from_, to_, t); }
 
-  // How far any point of the robot can move along the straight motion from a to b.
   double MotionBound(const Config& a, const Config& b) const {
-    double bound = 0;
-    for (size_t i = 0; i < body_component_.size(); ++i) {
-      const int c = body_component_[i];
-      bound +=
-          space_.TranslationDistance(c, a, b) + body_radius_[i] * space_.RotationAngle(c, a, b);
-    }
-    return bound;
+    return RobotMotionBound(space_, body_component_, body_radius_, a, b);
   }
 
   // Certifies the stretch between two profile samples, halving it while the certificate fails.
@@ -253,13 +258,7 @@ double LocalPlanner::Clearance(const Config& q) const {
 }
 
 double LocalPlanner::MotionBound(const Config& a, const Config& b) const {
-  double bound = 0;
-  for (size_t i = 0; i < impl_->body_component.size(); ++i) {
-    const int c = impl_->body_component[i];
-    bound += space().TranslationDistance(c, a, b) +
-             impl_->body_radius[i] * space().RotationAngle(c, a, b);
-  }
-  return bound;
+  return RobotMotionBound(space(), impl_->body_component, impl_->body_radius, a, b);
 }
 
 int64_t LocalPlanner::total_collision_checks() const { return impl_->collision_checks.load(); }
