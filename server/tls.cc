@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "core/common/error.h"
+#include "core/common/file_bytes.h"
 
 namespace hgraph::server {
 namespace {
@@ -26,16 +27,6 @@ struct KeyFree {
 using Bio = std::unique_ptr<BIO, BioFree>;
 using Cert = std::unique_ptr<X509, X509Free>;
 using Key = std::unique_ptr<EVP_PKEY, KeyFree>;
-
-std::string ReadFile(const std::string& path, const char* flag) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    throw Error(ErrorCode::kNotFound, flag, "cannot read " + path + ": " + std::strerror(errno));
-  }
-  std::ostringstream bytes;
-  bytes << in.rdbuf();
-  return bytes.str();
-}
 
 // OpenSSL's reason for the last failure (names no input bytes), and clears its error queue.
 std::string OpensslReason() {
@@ -107,11 +98,11 @@ std::shared_ptr<grpc::ServerCredentials> MakeServerCredentials(const TlsFiles& f
   const TransportMode mode = TransportModeOf(files);
   if (mode == TransportMode::kPlaintext) return grpc::InsecureServerCredentials();
 
-  const std::string cert_pem = ReadFile(files.cert, "--tls-cert");
+  const std::string cert_pem = ReadFileBytes(files.cert, "--tls-cert");
   const std::vector<Cert> chain = ReadCertificates(cert_pem, files.cert, "--tls-cert");
   CheckDates(chain.front().get(), files.cert, "--tls-cert");
 
-  const std::string key_pem = ReadFile(files.key, "--tls-key");
+  const std::string key_pem = ReadFileBytes(files.key, "--tls-key");
   Bio key_bio = MemoryBio(key_pem);
   Key key(PEM_read_bio_PrivateKey(key_bio.get(), nullptr, NoPassphrase, nullptr));
   if (!key) {
@@ -129,7 +120,7 @@ std::shared_ptr<grpc::ServerCredentials> MakeServerCredentials(const TlsFiles& f
                                         : GRPC_SSL_DONT_REQUEST_CLIENT_CERTIFICATE);
   options.pem_key_cert_pairs.push_back({.private_key = key_pem, .cert_chain = cert_pem});
   if (mode == TransportMode::kMutualTls) {
-    options.pem_root_certs = ReadFile(files.client_ca, "--tls-client-ca");
+    options.pem_root_certs = ReadFileBytes(files.client_ca, "--tls-client-ca");
     for (const Cert& ca :
          ReadCertificates(options.pem_root_certs, files.client_ca, "--tls-client-ca")) {
       CheckDates(ca.get(), files.client_ca, "--tls-client-ca");

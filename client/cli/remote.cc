@@ -21,6 +21,7 @@
 #include "core/adapter/scene_proto.h"
 #include "core/common/digest.h"
 #include "core/common/error.h"
+#include "core/common/file_bytes.h"
 #include "core/hgraph/bridge_candidates.h"
 #include "core/measure/measure.h"
 #include "server/status/status.h"
@@ -57,17 +58,6 @@ void Check(const grpc::Status& status, const char* method) {
   throw Error(FromGrpcCode(status.error_code()), "", message);
 }
 
-// A file named by a flag; Error(kNotFound, flag) when it cannot be read.
-std::string ReadFlagFile(const std::string& path, const char* flag) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    throw Error(ErrorCode::kNotFound, flag, "cannot read " + path + ": " + std::strerror(errno));
-  }
-  std::ostringstream bytes;
-  bytes << in.rdbuf();
-  return bytes.str();
-}
-
 v1::Digest DigestOf(const std::string& bytes) {
   v1::Digest digest;
   digest.set_sha256(Sha256Hex(bytes));
@@ -102,10 +92,10 @@ std::shared_ptr<grpc::Channel> OpenChannel(const RemoteOptions& remote) {
   std::shared_ptr<grpc::ChannelCredentials> credentials = grpc::InsecureChannelCredentials();
   if (!remote.tls_ca.empty() || !remote.tls_cert.empty()) {
     grpc::SslCredentialsOptions tls;
-    if (!remote.tls_ca.empty()) tls.pem_root_certs = ReadFlagFile(remote.tls_ca, "--tls-ca");
+    if (!remote.tls_ca.empty()) tls.pem_root_certs = ReadFileBytes(remote.tls_ca, "--tls-ca");
     if (!remote.tls_cert.empty()) {
-      tls.pem_cert_chain = ReadFlagFile(remote.tls_cert, "--tls-cert");
-      tls.pem_private_key = ReadFlagFile(remote.tls_key, "--tls-key");
+      tls.pem_cert_chain = ReadFileBytes(remote.tls_cert, "--tls-cert");
+      tls.pem_private_key = ReadFileBytes(remote.tls_key, "--tls-key");
     }
     credentials = grpc::SslCredentials(tls);
   }
