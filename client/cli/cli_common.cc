@@ -121,14 +121,24 @@ void ProgressPrinter::Report(const Progress& progress) {
   const auto now = Clock::now();
   const bool new_phase = progress.phase != phase_;
   const bool last = progress.done == progress.total;
-  if (!new_phase && !last && now - last_print_ < (tty_ ? kTtyInterval : kLogInterval)) return;
+  // Each improvement of the post-optimization is printed; other events are throttled.
+  const bool improvement = !std::isnan(progress.objective);
+  if (!new_phase && !last && !improvement &&
+      now - last_print_ < (tty_ ? kTtyInterval : kLogInterval)) {
+    return;
+  }
   // On a log, the end of a phase is implied by the next one starting.
   if (!tty_ && !new_phase && last) return;
   phase_ = progress.phase;
   last_print_ = now;
   char line[256];
   // Counts only where the phase has any (planning reports none).
-  if (progress.collision_checks > 0 || progress.distance_queries > 0) {
+  if (improvement) {
+    // An improvement of the post-optimization: round, objective so far, time.
+    std::snprintf(line, sizeof(line), "[%-9s] round %lld  objective %.6g  %.1f ms",
+                  progress.phase.c_str(), static_cast<long long>(progress.done),
+                  progress.objective, progress.elapsed_ms);
+  } else if (progress.collision_checks > 0 || progress.distance_queries > 0) {
     std::snprintf(line, sizeof(line),
                   "[%-9s] %lld/%lld  collision checks %lld  distance queries %lld  %.1f s",
                   progress.phase.c_str(), static_cast<long long>(progress.done),
