@@ -150,9 +150,9 @@ class HybridizationSession {
   void CheckEdges(const std::vector<int>& edge_ids, EdgeNeed need, const std::string& phase,
                   const ProgressCallback& progress, const CancelToken& cancel, int64_t* checked);
   // Brings the edges a lazy search wants one step closer to their exact value under a measure
-  // that needs clearance: a validity check and a probe of the middle of the profile's grid, then
-  // a probe of its quarters, then the whole profile. Each step tightens the edge's bound, so
-  // an edge that stops being wanted never gets its profile.
+  // that needs clearance: a probe of the middle of the profile's grid, then of its quarters, its
+  // eighths, ..., then the whole profile. Each step tightens the edge's bound (or finds the
+  // motion in contact), so an edge that stops being wanted never pays for its profile.
   void RefineClearanceEdges(const std::vector<int>& edge_ids, const ProgressCallback& progress,
                             const CancelToken& cancel, int64_t* checked);
   // Computes the clearance of every node that lacks one (the lazy bounds use them). Returns how
@@ -186,8 +186,6 @@ class HybridizationSession {
   // before the profile itself (MotionChecker::ProbeClearance), and how many probe rounds ran.
   std::vector<std::vector<ClearanceSample>> probes_;
   std::vector<int8_t> probe_rounds_;
-  // Per edge: checked for validity by the current query (which then counts its profile no more).
-  std::vector<char> validity_checked_in_query_;
 };
 
 // Build + one query.

@@ -262,7 +262,8 @@ double LocalPlanner::MotionBound(const Config& a, const Config& b) const {
 }
 
 std::vector<ClearanceSample> LocalPlanner::ProbeClearance(
-    const Config& from, const Config& to, const std::vector<double>& fractions) const {
+    const Config& from, const Config& to, const std::vector<double>& fractions,
+    const std::vector<ClearanceSample>& known) const {
   const Space& s = space();
   HGRAPH_CHECK(from.size() == s.dimension() && to.size() == s.dimension());
   // The profile's grid (CheckEdge): t = k / segments, the configuration interpolated from `from`.
@@ -270,7 +271,10 @@ std::vector<ClearanceSample> LocalPlanner::ProbeClearance(
   std::vector<int> ks;
   for (double f : fractions) {
     const int k = static_cast<int>(std::lround(std::clamp(f, 0.0, 1.0) * segments));
-    if (k > 0 && k < segments) ks.push_back(k);
+    const double t = static_cast<double>(k) / segments;
+    const bool seen = std::any_of(known.begin(), known.end(),
+                                  [t](const ClearanceSample& sample) { return sample.t == t; });
+    if (k > 0 && k < segments && !seen) ks.push_back(k);
   }
   std::sort(ks.begin(), ks.end());
   ks.erase(std::unique(ks.begin(), ks.end()), ks.end());

@@ -49,6 +49,11 @@ class CountingChecker final : public MotionChecker {
   double MotionBound(const Config& a, const Config& b) const override {
     return inner_.MotionBound(a, b);
   }
+  std::vector<ClearanceSample> ProbeClearance(
+      const Config& from, const Config& to, const std::vector<double>& fractions,
+      const std::vector<ClearanceSample>& known) const override {
+    return inner_.ProbeClearance(from, to, fractions, known);
+  }
   int64_t total_collision_checks() const override { return inner_.total_collision_checks(); }
   int64_t total_distance_queries() const override { return inner_.total_distance_queries(); }
   int64_t edges() const { return edges_.load(); }

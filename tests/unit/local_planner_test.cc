@@ -314,7 +314,8 @@ TEST(LocalPlannerTest, ProbesAreProfileSamplesAndTightenTheBounds) {
     for (const std::vector<double>& fractions :
          {std::vector<double>{0.5}, {0.25, 0.75}, {0.125, 0.375, 0.625, 0.875}}) {
       const int64_t before = planner.total_distance_queries();
-      const std::vector<ClearanceSample> found = planner.ProbeClearance(from, to, fractions);
+      const std::vector<ClearanceSample> found =
+          planner.ProbeClearance(from, to, fractions, probes);
       EXPECT_EQ(planner.total_distance_queries() - before, static_cast<int64_t>(found.size()));
       for (const ClearanceSample& sample : found) {
         const auto in_profile =
@@ -328,6 +329,10 @@ TEST(LocalPlannerTest, ProbesAreProfileSamplesAndTightenTheBounds) {
       }
       std::sort(probes.begin(), probes.end(),
                 [](const ClearanceSample& a, const ClearanceSample& b) { return a.t < b.t; });
+      // Nothing twice: the same points asked for again are not probed again.
+      const int64_t again = planner.total_distance_queries();
+      EXPECT_TRUE(planner.ProbeClearance(from, to, fractions, probes).empty());
+      EXPECT_EQ(planner.total_distance_queries(), again);
       input.interior = &probes;
       const double bound = inverse->EdgeBound(input);
       EXPECT_LE(bound, inverse->EdgeValue(profile)) << "edge " << i;
