@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <mutex>
+#include <utility>
 
 #include "core/common/client_text.h"
 #include "core/common/error.h"
@@ -68,6 +69,21 @@ class ProgressReporter {
   int64_t checks_at_start_;
   int64_t queries_at_start_;
 };
+
+// The H-Graph's shape in `stats`: its sizes and the candidate parameters, which every query
+// reports as they are, without the figures that count the work of one call (checks, queries,
+// rounds, reuse).
+MergeStats ShapeOf(const MergeStats& stats) {
+  return MergeStats{.nodes = stats.nodes,
+                    .input_edges = stats.input_edges,
+                    .input_edges_invalid = stats.input_edges_invalid,
+                    .candidate_edges = stats.candidate_edges,
+                    .threads = stats.threads,
+                    .alignments = stats.alignments,
+                    .radius = stats.radius,
+                    .gap_init = stats.gap_init,
+                    .gap_extend = stats.gap_extend};
+}
 
 // A stretch of an input edge in the H-Graph: the edge's report, whether the H-Graph edge runs
 // against the input's direction, and the part [t0, t1] of the input edge it covers.
@@ -491,22 +507,11 @@ MergeResult HybridizationSession::Query(const MeasureSpec& spec, const ProgressC
   MergeResult result;
   result.measure = spec;
   result.variant = options_.candidates.variant;
-  const bool first = first_query_;
-  first_query_ = false;
-  if (first) {
-    result.stats = build_stats_;
-    result.timing = build_timing_;
-  } else {
-    result.stats.nodes = build_stats_.nodes;
-    result.stats.input_edges = build_stats_.input_edges;
-    result.stats.input_edges_invalid = build_stats_.input_edges_invalid;
-    result.stats.candidate_edges = build_stats_.candidate_edges;
-    result.stats.alignments = build_stats_.alignments;
-    result.stats.radius = build_stats_.radius;
-    result.stats.gap_init = build_stats_.gap_init;
-    result.stats.gap_extend = build_stats_.gap_extend;
-    result.stats.threads = build_stats_.threads;
-  }
+  // The first query reports the build with its own work; a later one reports the same shape
+  // and only its own work.
+  const bool first = std::exchange(first_query_, false);
+  result.stats = first ? build_stats_ : ShapeOf(build_stats_);
+  result.timing = first ? build_timing_ : MergeTiming{};
   const int64_t checks_before = checker_->total_collision_checks();
   const int64_t queries_before = checker_->total_distance_queries();
   int64_t rechecked = 0;
@@ -608,17 +613,9 @@ MergeResult HybridizationSession::Query(const MeasureSpec& spec, const ProgressC
   if (result.best_input >= 0) result.best_input_objective = measure->Objective(best_quality);
   result.timing.evaluate_ms += MsSince(phase);
 
-  const int64_t query_checks = checker_->total_collision_checks() - checks_before;
-  const int64_t query_queries = checker_->total_distance_queries() - queries_before;
-  if (first) {
-    result.stats.collision_checks += query_checks;
-    result.stats.distance_queries += query_queries;
-    result.stats.edges_checked += rechecked;
-  } else {
-    result.stats.collision_checks = query_checks;
-    result.stats.distance_queries = query_queries;
-    result.stats.edges_checked = rechecked;
-  }
+  result.stats.collision_checks += checker_->total_collision_checks() - checks_before;
+  result.stats.distance_queries += checker_->total_distance_queries() - queries_before;
+  result.stats.edges_checked += rechecked;
   int64_t checked_edges = 0;
   result.stats.edges_valid = 0;
   for (int e = 0; e < graph_.num_edges(); ++e) {
@@ -627,7 +624,7 @@ MergeResult HybridizationSession::Query(const MeasureSpec& spec, const ProgressC
     if (state == EdgeState::kValid) ++result.stats.edges_valid;
   }
   result.stats.edges_reused = first ? 0 : checked_edges - rechecked;
-  result.timing.total_ms = (first ? build_timing_.total_ms : 0.0) + MsSince(started);
+  result.timing.total_ms += MsSince(started);
   return result;
 }
 
