@@ -35,41 +35,6 @@ int ResolveThreads(int threads) {
   return threads == 0 ? DefaultConcurrency() : threads;
 }
 
-// Reports progress from worker threads at most about every percent of the work.
-class ProgressReporter {
- public:
-  ProgressReporter(const ProgressCallback& callback, std::string phase, int64_t total,
-                   const MotionChecker& checker, Clock::time_point started)
-      : callback_(callback),
-        phase_(std::move(phase)),
-        total_(total),
-        step_(std::max<int64_t>(1, total / 100)),
-        checker_(checker),
-        started_(started),
-        checks_at_start_(checker.total_collision_checks()),
-        queries_at_start_(checker.total_distance_queries()) {}
-
-  void Done(int64_t done) const {
-    if (!callback_ || (done % step_ != 0 && done != total_)) return;
-    callback_(Progress{.phase = phase_,
-                       .done = done,
-                       .total = total_,
-                       .collision_checks = checker_.total_collision_checks() - checks_at_start_,
-                       .distance_queries = checker_.total_distance_queries() - queries_at_start_,
-                       .elapsed_ms = MsSince(started_)});
-  }
-
- private:
-  const ProgressCallback& callback_;
-  std::string phase_;
-  int64_t total_;
-  int64_t step_;
-  const MotionChecker& checker_;
-  Clock::time_point started_;
-  int64_t checks_at_start_;
-  int64_t queries_at_start_;
-};
-
 // The H-Graph's shape in `stats`: its sizes and the candidate parameters, which every query
 // reports as they are, without the figures that count the work of one call (checks, queries,
 // rounds, reuse).
@@ -222,7 +187,9 @@ void HybridizationSession::CheckEdges(const std::vector<int>& edge_ids, EdgeNeed
                                       const CancelToken& cancel, int64_t* checked) {
   const int64_t total = static_cast<int64_t>(edge_ids.size());
   if (total == 0) return;
-  const ProgressReporter reporter(progress, phase, total, *checker_, Clock::now());
+  const ThrottledProgress reporter(progress, phase, total, Clock::now());
+  const int64_t checks_at_start = checker_->total_collision_checks();
+  const int64_t queries_at_start = checker_->total_distance_queries();
   std::atomic<int64_t> done{0};
   ParallelFor(ResolveThreads(options_.threads), edge_ids.size(), [&](size_t k) {
     if (cancel.stopped()) return;
@@ -240,7 +207,9 @@ void HybridizationSession::CheckEdges(const std::vector<int>& edge_ids, EdgeNeed
       edge.report.collision_checks += previous.collision_checks;
       edge.report.distance_queries += previous.distance_queries;
     }
-    reporter.Done(done.fetch_add(1, std::memory_order_relaxed) + 1);
+    reporter.Done(done.fetch_add(1, std::memory_order_relaxed) + 1,
+                  checker_->total_collision_checks() - checks_at_start,
+                  checker_->total_distance_queries() - queries_at_start);
   });
   cancel.ThrowIfStopped();
   *checked += total;
