@@ -136,8 +136,8 @@ void ProgressPrinter::Report(const Progress& progress) {
   if (improvement) {
     // An improvement of the post-optimization: round, objective so far, time.
     std::snprintf(line, sizeof(line), "[%-9s] round %lld  objective %.6g  %.1f ms",
-                  progress.phase.c_str(), static_cast<long long>(progress.done),
-                  progress.objective, progress.elapsed_ms);
+                  progress.phase.c_str(), static_cast<long long>(progress.done), progress.objective,
+                  progress.elapsed_ms);
   } else if (progress.collision_checks > 0 || progress.distance_queries > 0) {
     std::snprintf(line, sizeof(line),
                   "[%-9s] %lld/%lld  collision checks %lld  distance queries %lld  %.1f s",
