@@ -123,6 +123,15 @@ double PowerIntegral(double a, double b, double k) {
   return (std::pow(b, 1 - k) - std::pow(a, 1 - k)) / (1 - k);
 }
 
+// The smallest clearance known on an unchecked edge: at its ends and its probed points.
+double MinKnownClearance(const EdgeBoundInput& edge) {
+  double c = std::min(edge.clearance_from, edge.clearance_to);
+  if (edge.interior != nullptr) {
+    for (const ClearanceSample& sample : *edge.interior) c = std::min(c, sample.clearance);
+  }
+  return c;
+}
+
 class LengthMeasure final : public Measure {
  public:
   explicit LengthMeasure(const MeasureSpec& spec) : Measure(spec) {}
@@ -144,28 +153,44 @@ class InverseClearanceMeasure final : public Measure {
     return InverseClearanceIntegral(report, spec().k);
   }
   double cost_per_distance() const override { return spec().k == 0 ? 1 : 0; }
-  // Clearance changes no faster than robot points move, so along the edge it is at most
-  // u(t) = min(c0 + D t, c1 + D (1 - t)) (c0, c1 the end clearances, D the motion bound). The
-  // profile's samples lie under u, and u^-k is convex (a convex decreasing function of a concave
-  // one), so the trapezoid sum over any samples is at least length * integral of u^-k.
+  // Clearance changes no faster than robot points move, so between two samples (c0 at t0, c1 at
+  // t1; the ends and the probed interior points) it is at most
+  // u(t) = min(c0 + D (t - t0), c1 + D (t1 - t)), D the motion bound. The profile's samples lie
+  // under u, the probed points are among them, and u^-k is convex between two probed points (a
+  // convex decreasing function of a concave one), so the trapezoid sum over the profile is at
+  // least length * integral of u^-k.
   double EdgeBound(const EdgeBoundInput& edge) const override {
     const double k = spec().k;
     if (k == 0) return edge.length;
-    const double c0 = edge.clearance_from;
-    const double c1 = edge.clearance_to;
-    if (!(c0 > 0) || !(c1 > 0)) return kInf;  // an end in contact: the edge cannot be valid
+    if (!(MinKnownClearance(edge) > 0)) return kInf;  // a point in contact: cannot be valid
     if (edge.length <= 0) return 0;
-    if (!std::isfinite(c0) || !std::isfinite(c1) || !std::isfinite(edge.motion_bound)) return 0;
     const double d = edge.motion_bound;
-    double integral;
-    if (d <= 1e-12 * std::max(c0, c1)) {
-      integral = std::pow(std::min(c0, c1), -k);
-    } else {
-      // u peaks where the two lines meet, at t* in [0, 1].
-      const double peak = std::clamp((c1 - c0 + d) / (2 * d), 0.0, 1.0);
-      integral =
-          (PowerIntegral(c0, c0 + d * peak, k) + PowerIntegral(c1, c1 + d * (1 - peak), k)) / d;
+    if (!std::isfinite(edge.clearance_from) || !std::isfinite(edge.clearance_to) ||
+        !std::isfinite(d)) {
+      return 0;
     }
+    double integral = 0;
+    double t0 = 0;
+    double c0 = edge.clearance_from;
+    const auto piece = [&](double t1, double c1) {
+      const double w = t1 - t0;
+      if (w <= 0) return;
+      const double dw = d * w;
+      if (dw <= 1e-12 * std::max(c0, c1)) {
+        integral += w * std::pow(std::min(c0, c1), -k);
+      } else {
+        // u peaks where the two lines meet.
+        const double peak = std::clamp((c1 - c0 + dw) / (2 * dw), 0.0, 1.0);
+        integral +=
+            (PowerIntegral(c0, c0 + dw * peak, k) + PowerIntegral(c1, c1 + dw * (1 - peak), k)) / d;
+      }
+      t0 = t1;
+      c0 = c1;
+    };
+    if (edge.interior != nullptr) {
+      for (const ClearanceSample& sample : *edge.interior) piece(sample.t, sample.clearance);
+    }
+    piece(1.0, edge.clearance_to);
     // A little slack for rounding: the bound must never exceed the checked cost.
     return edge.length * integral * (1 - 1e-9);
   }
@@ -180,11 +205,9 @@ class BottleneckMeasure final : public Measure {
   Combine combine() const override { return Combine::kBottleneck; }
   bool needs_clearance() const override { return true; }
   double EdgeValue(const EdgeReport& report) const override { return MinClearance(report); }
-  // The profile starts and ends at the edge's end configurations, so its minimum is at most
-  // theirs.
-  double EdgeBound(const EdgeBoundInput& edge) const override {
-    return std::min(edge.clearance_from, edge.clearance_to);
-  }
+  // The profile starts and ends at the edge's end configurations and holds the probed points, so
+  // its minimum is at most theirs.
+  double EdgeBound(const EdgeBoundInput& edge) const override { return MinKnownClearance(edge); }
   double Objective(const PathQuality& quality) const override { return -quality.min_clearance; }
 };
 
@@ -197,9 +220,10 @@ class SafeLengthMeasure final : public Measure {
     if (spec().safety > 0 && MinClearance(report) < spec().safety) return kInf;
     return report.length;
   }
-  // An edge whose end is closer than C to an obstacle is unusable without a check.
+  // An edge with an end or a probed point closer than C to an obstacle is unusable without a
+  // check.
   double EdgeBound(const EdgeBoundInput& edge) const override {
-    if (spec().safety > 0 && std::min(edge.clearance_from, edge.clearance_to) < spec().safety) {
+    if (spec().safety > 0 && MinKnownClearance(edge) < spec().safety) {
       return kInf;
     }
     return edge.length;

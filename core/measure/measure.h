@@ -28,8 +28,8 @@ MeasureType ParseMeasureType(const std::string& name, const std::string& field);
 
 struct MeasureSpec {
   MeasureType type = MeasureType::kLength;
-  double k = kDefaultInverseClearanceK;       // inverse clearance exponent, >= 0
-  double safety = 0.0;  // safe-length minimum clearance C, >= 0
+  double k = kDefaultInverseClearanceK;  // inverse clearance exponent, >= 0
+  double safety = 0.0;                   // safe-length minimum clearance C, >= 0
 };
 
 // Throws InputError naming "measure.k" or "measure.safety" for negative or non-finite values.
@@ -71,13 +71,15 @@ class QualityAccumulator {
 };
 
 // What is known of an edge before it is checked: its length (Space::Distance), the clearance at
-// its two end configurations (infinity when not computed), and how far any robot point moves
-// along it (MotionChecker::MotionBound; infinity when unknown).
+// its two end configurations (infinity when not computed), how far any robot point moves along
+// it (MotionChecker::MotionBound; infinity when unknown), and clearances probed at interior
+// points of its profile's grid (MotionChecker::ProbeClearance; sorted by t, may be null).
 struct EdgeBoundInput {
   double length = 0;
   double clearance_from = std::numeric_limits<double>::infinity();
   double clearance_to = std::numeric_limits<double>::infinity();
   double motion_bound = std::numeric_limits<double>::infinity();
+  const std::vector<ClearanceSample>* interior = nullptr;
 };
 
 // A quality measure as the search sees it (paper, Appendix): the value of a checked edge, a bound

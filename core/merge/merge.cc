@@ -26,6 +26,14 @@ using Clock = std::chrono::steady_clock;
 // 1, 2, 4 and 8 check 9654, 9661, 9665 and 9682 edges.
 constexpr int kLazyBatch = 8;
 
+// The probe rounds of an edge under a measure that needs clearance (RefineClearanceEdges): the
+// fractions of the way probed in each, before the whole profile.
+const std::vector<std::vector<double>>& ProbeFractions() {
+  static const std::vector<std::vector<double>> fractions = {
+      {0.5}, {0.25, 0.75}, {0.125, 0.375, 0.625, 0.875}};
+  return fractions;
+}
+
 // The automatic post-optimization's budget, and the gain below which a round ends it.
 constexpr double kAutomaticOptimizeMs = 2000;
 constexpr double kOptimizeMinGain = 1e-3;
@@ -164,6 +172,9 @@ HybridizationSession::HybridizationSession(const MotionChecker& checker,
         space.Distance(graph_.node(graph_.edge(e).u).q, graph_.node(graph_.edge(e).v).q);
   }
   motion_bound_.assign(graph_.num_edges(), std::numeric_limits<double>::quiet_NaN());
+  probes_.assign(graph_.num_edges(), {});
+  probe_rounds_.assign(graph_.num_edges(), 0);
+  validity_checked_in_query_.assign(graph_.num_edges(), 0);
 
   if (eager) {
     phase = Clock::now();
@@ -215,6 +226,56 @@ void HybridizationSession::CheckEdges(const std::vector<int>& edge_ids, EdgeNeed
   *checked += total;
 }
 
+void HybridizationSession::RefineClearanceEdges(const std::vector<int>& edge_ids,
+                                                const ProgressCallback& progress,
+                                                const CancelToken& cancel, int64_t* checked) {
+  const int rounds = static_cast<int>(ProbeFractions().size());
+  std::vector<int> validity;
+  std::vector<int> probe;
+  std::vector<int> profile;
+  for (int e : edge_ids) {
+    if (probe_rounds_[e] >= rounds) {
+      profile.push_back(e);
+      continue;
+    }
+    // The first probe comes before the validity check: one distance query that often finds the
+    // edge's middle in collision (an unusable bound) or its bound too high to be wanted again.
+    if (probe_rounds_[e] > 0 && graph_.edge(e).report.state == EdgeState::kUnchecked) {
+      validity.push_back(e);
+    }
+    probe.push_back(e);
+  }
+  CheckEdges(validity, EdgeNeed::kValidity, "check", progress, cancel, checked);
+  for (int e : validity) validity_checked_in_query_[e] = 1;
+  // An edge counts once per query, however many steps its check took.
+  std::vector<int> counted;
+  std::vector<int> uncounted;
+  for (int e : profile) (validity_checked_in_query_[e] ? uncounted : counted).push_back(e);
+  CheckEdges(counted, EdgeNeed::kClearance, "check", progress, cancel, checked);
+  int64_t steps = 0;
+  CheckEdges(uncounted, EdgeNeed::kClearance, "check", progress, cancel, &steps);
+  ParallelFor(ResolveThreads(options_.threads), probe.size(), [&](size_t k) {
+    if (cancel.stopped()) return;
+    const int e = probe[k];
+    const HEdge& edge = graph_.edge(e);
+    if (edge.report.state == EdgeState::kInvalid) return;
+    const std::vector<ClearanceSample> found = checker_->ProbeClearance(
+        graph_.node(edge.u).q, graph_.node(edge.v).q, ProbeFractions()[probe_rounds_[e]]);
+    // No interior point on the grid (or a checker that cannot probe): the profile is next.
+    probe_rounds_[e] =
+        found.empty() ? static_cast<int8_t>(rounds) : static_cast<int8_t>(probe_rounds_[e] + 1);
+    std::vector<ClearanceSample>& known = probes_[e];
+    for (const ClearanceSample& sample : found) {
+      const bool seen = std::any_of(known.begin(), known.end(),
+                                    [&](const ClearanceSample& s) { return s.t == sample.t; });
+      if (!seen) known.push_back(sample);
+    }
+    std::sort(known.begin(), known.end(),
+              [](const ClearanceSample& a, const ClearanceSample& b) { return a.t < b.t; });
+  });
+  cancel.ThrowIfStopped();
+}
+
 int64_t HybridizationSession::ComputeNodeClearances(const CancelToken& cancel) {
   std::vector<int> missing;
   for (int n = 0; n < graph_.num_nodes(); ++n) {
@@ -241,7 +302,8 @@ EdgeBoundInput HybridizationSession::BoundInput(int e) {
   return EdgeBoundInput{.length = edge_length_[e],
                         .clearance_from = clearance(edge.u),
                         .clearance_to = clearance(edge.v),
-                        .motion_bound = motion_bound_[e]};
+                        .motion_bound = motion_bound_[e],
+                        .interior = probes_[e].empty() ? nullptr : &probes_[e]};
 }
 
 int64_t HybridizationSession::AddPaths(const std::vector<InputPath>& paths,
@@ -299,6 +361,9 @@ void HybridizationSession::SyncEdgeData() {
     const HEdge& edge = graph_.edge(e);
     edge_length_.push_back(space.Distance(graph_.node(edge.u).q, graph_.node(edge.v).q));
     motion_bound_.push_back(nan);
+    probes_.emplace_back();
+    probe_rounds_.push_back(0);
+    validity_checked_in_query_.push_back(0);
   }
 }
 
@@ -348,8 +413,11 @@ SearchResult HybridizationSession::SearchBest(const Measure& measure, EdgeNeed f
     LazySearchStats lazy;
     const EvaluateFn evaluate = [&](const std::vector<int>& edges) {
       const Clock::time_point checking = Clock::now();
-      CheckEdges(edges, needs_clearance ? EdgeNeed::kClearance : EdgeNeed::kValidity, "check",
-                 progress, cancel, rechecked);
+      if (needs_clearance) {
+        RefineClearanceEdges(edges, progress, cancel, rechecked);
+      } else {
+        CheckEdges(edges, EdgeNeed::kValidity, "check", progress, cancel, rechecked);
+      }
       checking_ms += MsSince(checking);
     };
     SearchResult best =
@@ -484,6 +552,7 @@ MergeResult HybridizationSession::Query(const MeasureSpec& spec, const ProgressC
   const int64_t checks_before = checker_->total_collision_checks();
   const int64_t queries_before = checker_->total_distance_queries();
   int64_t rechecked = 0;
+  std::fill(validity_checked_in_query_.begin(), validity_checked_in_query_.end(), 0);
 
   Clock::time_point phase = Clock::now();
   if (options_.evaluation == Evaluation::kEager) {
@@ -546,8 +615,10 @@ MergeResult HybridizationSession::Query(const MeasureSpec& spec, const ProgressC
       const int index = j == 0 ? 0 : from.index;
       const double t1 = (j + 2 == ids.size() || to.t == 0) ? 1.0 : to.t;
       const EdgeReport* report = &graph_.edge(e).report;
-      if (report->state == EdgeState::kUnchecked) {
-        // Not checked by this lazy merge: its length is known, nothing else.
+      if (report->state == EdgeState::kUnchecked ||
+          (needs_clearance && report->state == EdgeState::kValid && !report->has_clearance)) {
+        // Not checked by this lazy merge (or, under a measure of clearance, found valid but not
+        // profiled): its length is known, nothing else.
         checked = false;
         estimated[index].push_back(
             EdgeReport{.state = EdgeState::kValid, .length = edge_length_[e]});
@@ -563,8 +634,11 @@ MergeResult HybridizationSession::Query(const MeasureSpec& spec, const ProgressC
       if (parts[j].empty()) continue;
       size_t next_estimate = 0;
       for (EdgePart& part : parts[j]) {
-        if (part.report->state == EdgeState::kUnchecked)
+        if (part.report->state == EdgeState::kUnchecked ||
+            (needs_clearance && part.report->state == EdgeState::kValid &&
+             !part.report->has_clearance)) {
           part.report = &estimated[j][next_estimate++];
+        }
       }
       joined[j] = JoinParts(parts[j]);
       edges[j] = &joined[j];
@@ -612,6 +686,8 @@ size_t HybridizationSession::memory_bytes() const {
   bytes += (edge_length_.capacity() + motion_bound_.capacity() + node_clearance_.capacity() +
             goal_distance_.capacity()) *
            sizeof(double);
+  bytes += probes_.capacity() * sizeof(std::vector<ClearanceSample>) + probe_rounds_.capacity();
+  for (const auto& samples : probes_) bytes += samples.capacity() * sizeof(ClearanceSample);
   return bytes;
 }
 

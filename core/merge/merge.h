@@ -149,6 +149,12 @@ class HybridizationSession {
   // Checks the edges in parallel for `need`.
   void CheckEdges(const std::vector<int>& edge_ids, EdgeNeed need, const std::string& phase,
                   const ProgressCallback& progress, const CancelToken& cancel, int64_t* checked);
+  // Brings the edges a lazy search wants one step closer to their exact value under a measure
+  // that needs clearance: a validity check and a probe of the middle of the profile's grid, then
+  // a probe of its quarters, then the whole profile. Each step tightens the edge's bound, so
+  // an edge that stops being wanted never gets its profile.
+  void RefineClearanceEdges(const std::vector<int>& edge_ids, const ProgressCallback& progress,
+                            const CancelToken& cancel, int64_t* checked);
   // Computes the clearance of every node that lacks one (the lazy bounds use them). Returns how
   // many it computed.
   int64_t ComputeNodeClearances(const CancelToken& cancel);
@@ -176,6 +182,12 @@ class HybridizationSession {
   std::vector<double> motion_bound_;    // per edge: MotionChecker::MotionBound, NaN until needed
   std::vector<double> node_clearance_;  // per node: clearance, NaN until needed
   std::vector<double> goal_distance_;   // per node: Space::Distance to the goal
+  // Per edge, for measures that need clearance: the clearances probed on its profile's grid
+  // before the profile itself (MotionChecker::ProbeClearance), and how many probe rounds ran.
+  std::vector<std::vector<ClearanceSample>> probes_;
+  std::vector<int8_t> probe_rounds_;
+  // Per edge: checked for validity by the current query (which then counts its profile no more).
+  std::vector<char> validity_checked_in_query_;
 };
 
 // Build + one query.

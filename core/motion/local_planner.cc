@@ -261,6 +261,30 @@ double LocalPlanner::MotionBound(const Config& a, const Config& b) const {
   return RobotMotionBound(space(), impl_->body_component, impl_->body_radius, a, b);
 }
 
+std::vector<ClearanceSample> LocalPlanner::ProbeClearance(
+    const Config& from, const Config& to, const std::vector<double>& fractions) const {
+  const Space& s = space();
+  HGRAPH_CHECK(from.size() == s.dimension() && to.size() == s.dimension());
+  // The profile's grid (CheckEdge): t = k / segments, the configuration interpolated from `from`.
+  const int segments = SampleCount(s.Distance(from, to)) - 1;
+  std::vector<int> ks;
+  for (double f : fractions) {
+    const int k = static_cast<int>(std::lround(std::clamp(f, 0.0, 1.0) * segments));
+    if (k > 0 && k < segments) ks.push_back(k);
+  }
+  std::sort(ks.begin(), ks.end());
+  ks.erase(std::unique(ks.begin(), ks.end()), ks.end());
+  CollisionContext& context = impl_->Context(*world_);
+  std::vector<ClearanceSample> out;
+  out.reserve(ks.size());
+  for (int k : ks) {
+    const double t = static_cast<double>(k) / segments;
+    out.push_back({.t = t, .clearance = context.Clearance(s.Interpolate(from, to, t))});
+  }
+  impl_->distance_queries += static_cast<int64_t>(out.size());
+  return out;
+}
+
 int64_t LocalPlanner::total_collision_checks() const { return impl_->collision_checks.load(); }
 int64_t LocalPlanner::total_distance_queries() const { return impl_->distance_queries.load(); }
 

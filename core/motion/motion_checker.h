@@ -99,6 +99,19 @@ class MotionChecker {
     (void)b;
     return std::numeric_limits<double>::infinity();
   }
+  // Clearances at points of the grid a clearance profile of the motion from `from` to `to`
+  // samples (kClearance), nearest to the given fractions of the way, interior points only, each
+  // once, sorted by t: the very samples the profile would record there, so that a bound built on
+  // them holds for the profile. Lazy evaluation tightens an edge's bound with them before it pays
+  // for the whole profile. Empty when the checker cannot say (the default) or the grid has no
+  // interior point. Counts a distance query per sample.
+  virtual std::vector<ClearanceSample> ProbeClearance(const Config& from, const Config& to,
+                                                      const std::vector<double>& fractions) const {
+    (void)from;
+    (void)to;
+    (void)fractions;
+    return {};
+  }
   // Totals over every query this checker ran so far (for progress and stats).
   virtual int64_t total_collision_checks() const = 0;
   virtual int64_t total_distance_queries() const = 0;

@@ -172,8 +172,8 @@ SearchResult LazySearch(const HGraph& graph, const SearchEdgeFn& see, const Exac
         ++stats->evaluations;
         stats->edges_evaluated += static_cast<int64_t>(to_check.size());
       }
+      // Each edge is exact now, or its bound is tighter: it goes back with its new key.
       for (LazyEntry entry : pending) {
-        HGRAPH_CHECK(exact(entry.edge));
         entry.key = key_of(entry.parent_value, see(entry.edge).value, entry.node);
         if (!std::isnan(entry.key)) open.push(entry);
       }

@@ -40,10 +40,12 @@ SearchResult FindBestPath(const HGraph& graph, const Measure& measure, const Sea
 
 // Lazy search (lazy weighted A*, and its widest-path analogue for bottleneck measures): an edge
 // enters the open list with its bound and is checked only when the search would settle a node
-// through it; then it goes back with its exact value. Returns the same optimum as
+// through it; then it goes back with its exact value, or with a tighter bound (a refinement in
+// steps, for bounds that are cheaper to tighten than to make exact). Returns the same optimum as
 // FindBestPath(graph, measure, see) on the checked graph, with far fewer checks: once a node is
 // settled, no other edge into it is checked. `exact(e)` says whether `see(e)` is exact;
-// `evaluate(edges)` checks the edges so that `see` is exact for them afterwards. The search
+// `evaluate(edges)` checks the edges so that `see` is exact for them afterwards, or at least
+// tighter (never looser), and exact after finitely many calls. The search
 // evaluates up to `batch` edges at a time (the most promising ones), so a parallel `evaluate`
 // keeps several threads busy. The path's edges are all exact on return.
 using ExactFn = std::function<bool(int edge)>;

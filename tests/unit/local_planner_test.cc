@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <random>
@@ -11,6 +12,7 @@
 #include <vector>
 
 #include "core/common/error.h"
+#include "core/measure/measure.h"
 
 namespace hgraph {
 namespace {
@@ -284,6 +286,59 @@ TEST(LocalPlannerTest, CertifyAgreesWithTheClearanceCheckAndCostsLess) {
       coarse.CheckEdge({.from = &a, .to = &b, .mode = EdgeCheckMode::kCertified});
   EXPECT_EQ(thin.state, EdgeState::kInvalid);
   EXPECT_FALSE(thin.certified);
+}
+
+// Probes are samples of the profile: same t, same clearance. Bounds built on them hold for the
+// profile's values (inverse clearance below, bottleneck above) and tighten as probes are added.
+TEST(LocalPlannerTest, ProbesAreProfileSamplesAndTightenTheBounds) {
+  const auto world = CircleWorld();
+  const LocalPlanner planner(world, {.resolution = 0.01});
+  const Space& space = world->space();
+  const auto inverse = Measure::Make({.type = MeasureType::kInverseClearance, .k = 3});
+  const auto bottleneck = Measure::Make({.type = MeasureType::kBottleneckClearance});
+  std::mt19937_64 rng(11);
+  int compared = 0, tightened = 0;
+  for (int i = 0; i < 400 && compared < 60; ++i) {
+    const Config from = space.Sample(rng);
+    Config to = space.Sample(rng);
+    to.head<2>() = from.head<2>() + 0.2 * (to.head<2>() - from.head<2>());
+    const EdgeReport profile = Check(planner, from, to, true);
+    if (profile.state != EdgeState::kValid || !profile.certified) continue;
+    ++compared;
+    EdgeBoundInput input{.length = profile.length,
+                         .clearance_from = planner.Clearance(from),
+                         .clearance_to = planner.Clearance(to),
+                         .motion_bound = planner.MotionBound(from, to)};
+    double previous = inverse->EdgeBound(input);
+    std::vector<ClearanceSample> probes;
+    for (const std::vector<double>& fractions :
+         {std::vector<double>{0.5}, {0.25, 0.75}, {0.125, 0.375, 0.625, 0.875}}) {
+      const int64_t before = planner.total_distance_queries();
+      const std::vector<ClearanceSample> found = planner.ProbeClearance(from, to, fractions);
+      EXPECT_EQ(planner.total_distance_queries() - before, static_cast<int64_t>(found.size()));
+      for (const ClearanceSample& sample : found) {
+        const auto in_profile =
+            std::find_if(profile.profile.begin(), profile.profile.end(),
+                         [&](const ClearanceSample& p) { return p.t == sample.t; });
+        ASSERT_NE(in_profile, profile.profile.end()) << "edge " << i << " t " << sample.t;
+        EXPECT_EQ(in_profile->clearance, sample.clearance);
+        EXPECT_GT(sample.t, 0);
+        EXPECT_LT(sample.t, 1);
+        probes.push_back(sample);
+      }
+      std::sort(probes.begin(), probes.end(),
+                [](const ClearanceSample& a, const ClearanceSample& b) { return a.t < b.t; });
+      input.interior = &probes;
+      const double bound = inverse->EdgeBound(input);
+      EXPECT_LE(bound, inverse->EdgeValue(profile)) << "edge " << i;
+      EXPECT_GE(bound, previous * (1 - 1e-12)) << "edge " << i;
+      if (bound > previous * 1.01) ++tightened;
+      previous = bound;
+      EXPECT_GE(bottleneck->EdgeBound(input), bottleneck->EdgeValue(profile)) << "edge " << i;
+    }
+  }
+  EXPECT_GE(compared, 30);
+  EXPECT_GT(tightened, compared / 2);
 }
 
 TEST(LocalPlannerTest, CountersAddUp) {
