@@ -2,16 +2,13 @@
 
 #include <algorithm>
 #include <cctype>
-#include <cerrno>
 #include <cstdint>
-#include <cstring>
-#include <fstream>
 #include <map>
 #include <set>
-#include <sstream>
 
 #include "core/common/digest.h"
 #include "core/common/error.h"
+#include "core/common/file_bytes.h"
 
 namespace hgraph::server {
 namespace {
@@ -134,16 +131,7 @@ TokenTable TokenTable::Parse(std::string_view text, const std::string& source) {
 }
 
 TokenTable TokenTable::Load(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    throw Error(ErrorCode::kNotFound, kFlag, "cannot read " + path + ": " + std::strerror(errno));
-  }
-  std::ostringstream bytes;
-  bytes << in.rdbuf();
-  if (in.bad()) {
-    throw Error(ErrorCode::kNotFound, kFlag, "cannot read " + path + ": " + std::strerror(errno));
-  }
-  return Parse(bytes.str(), path);
+  return Parse(ReadFileBytes(path, kFlag), path);
 }
 
 const std::string* TokenTable::Find(std::string_view token) const {

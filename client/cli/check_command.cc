@@ -59,14 +59,9 @@ Subcommand AddCheckCommand(CLI::App& parent) {
   app->add_flag("--sampled", f.sampled,
                 "Only the collision test at the resolution's samples (faster; may accept an edge "
                 "that grazes an obstacle between two samples, which a merge rejects)");
-  auto run_checked = [flags](const PathChecker& checker) { return RunCheck(*flags, checker); };
-  return Subcommand{.app = app,
-                    .run = [run_checked] { return run_checked({}); },
-                    .run_checked = run_checked,
-                    .run_remote =
-                        [flags, run_checked](const RemoteOptions& remote) {
-                          return run_checked(RemotePathChecker(remote, flags->scene));
-                        }};
+  return PathCheckingSubcommand(
+      app, [flags](const PathChecker& checker) { return RunCheck(*flags, checker); },
+      std::shared_ptr<const std::string>(flags, &flags->scene));
 }
 
 }  // namespace hgraph::cli

@@ -304,6 +304,17 @@ PathChecker RemotePathChecker(const RemoteOptions& remote, const std::string& sc
   };
 }
 
+Subcommand PathCheckingSubcommand(CLI::App* app, std::function<int(const PathChecker&)> run_checked,
+                                  std::shared_ptr<const std::string> scene_file) {
+  return Subcommand{.app = app,
+                    .run = [run_checked] { return run_checked({}); },
+                    .run_checked = run_checked,
+                    .run_remote =
+                        [run_checked, scene_file](const RemoteOptions& remote) {
+                          return run_checked(RemotePathChecker(remote, *scene_file));
+                        }};
+}
+
 Subcommand WithServer(Subcommand local) {
   HGRAPH_CHECK(local.run_remote);
   auto remote = std::make_shared<RemoteOptions>();

@@ -93,6 +93,13 @@ std::string OpenSceneFile(RemoteClient& client, const std::string& scene_file,
 // check.
 PathChecker RemotePathChecker(const RemoteOptions& remote, const std::string& scene_file);
 
+// The Subcommand of a subcommand whose engine work is checking paths in one scene file (check,
+// render): `run_checked` with an empty checker in process, and with RemotePathChecker on
+// *scene_file through --server. The file name is read when the subcommand runs, after parsing
+// (share it with the flags that hold it: std::shared_ptr<const std::string>(flags, &flags->scene)).
+Subcommand PathCheckingSubcommand(CLI::App* app, std::function<int(const PathChecker&)> run_checked,
+                                  std::shared_ptr<const std::string> scene_file);
+
 // The merge table of the in-process `merge`, from a proto result, then "hgraph <name>".
 void PrintRemoteResult(const v1::MergeResult& result, const std::string& hgraph);
 

@@ -122,14 +122,9 @@ Subcommand AddRenderCommand(CLI::App& parent) {
                   "Robot drawings along the merged path, for robots that rotate")
       ->capture_default_str();
   app->add_option("--width", f.width, "Picture width in pixels")->capture_default_str();
-  auto run_checked = [flags](const PathChecker& checker) { return RunRender(*flags, checker); };
-  return Subcommand{.app = app,
-                    .run = [run_checked] { return run_checked({}); },
-                    .run_checked = run_checked,
-                    .run_remote =
-                        [flags, run_checked](const RemoteOptions& remote) {
-                          return run_checked(RemotePathChecker(remote, flags->scene));
-                        }};
+  return PathCheckingSubcommand(
+      app, [flags](const PathChecker& checker) { return RunRender(*flags, checker); },
+      std::shared_ptr<const std::string>(flags, &flags->scene));
 }
 
 }  // namespace hgraph::cli

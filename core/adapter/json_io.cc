@@ -5,9 +5,10 @@
 #include <cerrno>
 #include <cstring>
 #include <fstream>
-#include <sstream>
+#include <optional>
 
 #include "core/common/error.h"
+#include "core/common/file_bytes.h"
 
 namespace hgraph {
 
@@ -40,16 +41,13 @@ void ReadJsonFile(const std::string& path, google::protobuf::Message* message) {
 }
 
 std::string ReadTextFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    const int err = errno;
-    throw Error(err == ENOENT ? ErrorCode::kNotFound : ErrorCode::kFailedPrecondition, path,
-                std::string("cannot open: ") + std::strerror(err));
+  std::string contents;
+  if (const std::optional<FileReadFailure> failure = TryReadFileBytes(path, &contents)) {
+    if (!failure->at_open) throw Error(ErrorCode::kFailedPrecondition, path, "read failed");
+    throw Error(failure->error == ENOENT ? ErrorCode::kNotFound : ErrorCode::kFailedPrecondition,
+                path, std::string("cannot open: ") + std::strerror(failure->error));
   }
-  std::ostringstream contents;
-  contents << in.rdbuf();
-  if (in.bad()) throw Error(ErrorCode::kFailedPrecondition, path, "read failed");
-  return contents.str();
+  return contents;
 }
 
 void WriteTextFile(const std::string& path, const std::string& contents) {

@@ -1,6 +1,7 @@
 // Progress reporting and cooperative cancellation for long operations.
 #pragma once
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstdint>
@@ -9,6 +10,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 
 #include "core/common/error.h"
 
@@ -66,5 +68,39 @@ struct Progress {
 
 // Called from worker threads, possibly concurrently; must be thread safe and cheap.
 using ProgressCallback = std::function<void(const Progress&)>;
+
+// The progress of `total` units of work done in parallel (the edge checks of a merge or of
+// CheckPaths), reported at most about once per percent of the work and always at the last unit,
+// so that many small units do not flood the stream. Thread safe as far as the callback is; holds
+// a reference to the callback, which must outlive it.
+class ThrottledProgress {
+ public:
+  ThrottledProgress(const ProgressCallback& callback, std::string phase, int64_t total,
+                    std::chrono::steady_clock::time_point started)
+      : callback_(callback),
+        phase_(std::move(phase)),
+        total_(total),
+        step_(std::max<int64_t>(1, total / 100)),
+        started_(started) {}
+
+  // Unit `done` (counted from 1) has finished, with the checks and queries done so far in this
+  // phase; reports it when it falls on the step.
+  void Done(int64_t done, int64_t collision_checks, int64_t distance_queries) const {
+    if (!callback_ || (done % step_ != 0 && done != total_)) return;
+    callback_(Progress{.phase = phase_,
+                       .done = done,
+                       .total = total_,
+                       .collision_checks = collision_checks,
+                       .distance_queries = distance_queries,
+                       .elapsed_ms = MsSince(started_)});
+  }
+
+ private:
+  const ProgressCallback& callback_;
+  std::string phase_;
+  int64_t total_;
+  int64_t step_;
+  std::chrono::steady_clock::time_point started_;
+};
 
 }  // namespace hgraph

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <mutex>
+#include <utility>
 
 #include "core/common/client_text.h"
 #include "core/common/error.h"
@@ -54,40 +55,20 @@ int ResolveThreads(int threads) {
   return threads == 0 ? DefaultConcurrency() : threads;
 }
 
-// Reports progress from worker threads at most about every percent of the work.
-class ProgressReporter {
- public:
-  ProgressReporter(const ProgressCallback& callback, std::string phase, int64_t total,
-                   const MotionChecker& checker, Clock::time_point started)
-      : callback_(callback),
-        phase_(std::move(phase)),
-        total_(total),
-        step_(std::max<int64_t>(1, total / 100)),
-        checker_(checker),
-        started_(started),
-        checks_at_start_(checker.total_collision_checks()),
-        queries_at_start_(checker.total_distance_queries()) {}
-
-  void Done(int64_t done) const {
-    if (!callback_ || (done % step_ != 0 && done != total_)) return;
-    callback_(Progress{.phase = phase_,
-                       .done = done,
-                       .total = total_,
-                       .collision_checks = checker_.total_collision_checks() - checks_at_start_,
-                       .distance_queries = checker_.total_distance_queries() - queries_at_start_,
-                       .elapsed_ms = MsSince(started_)});
-  }
-
- private:
-  const ProgressCallback& callback_;
-  std::string phase_;
-  int64_t total_;
-  int64_t step_;
-  const MotionChecker& checker_;
-  Clock::time_point started_;
-  int64_t checks_at_start_;
-  int64_t queries_at_start_;
-};
+// The H-Graph's shape in `stats`: its sizes and the candidate parameters, which every query
+// reports as they are, without the figures that count the work of one call (checks, queries,
+// rounds, reuse).
+MergeStats ShapeOf(const MergeStats& stats) {
+  return MergeStats{.nodes = stats.nodes,
+                    .input_edges = stats.input_edges,
+                    .input_edges_invalid = stats.input_edges_invalid,
+                    .candidate_edges = stats.candidate_edges,
+                    .threads = stats.threads,
+                    .alignments = stats.alignments,
+                    .radius = stats.radius,
+                    .gap_init = stats.gap_init,
+                    .gap_extend = stats.gap_extend};
+}
 
 // A stretch of an input edge in the H-Graph: the edge's report, whether the H-Graph edge runs
 // against the input's direction, and the part [t0, t1] of the input edge it covers.
@@ -228,7 +209,9 @@ void HybridizationSession::CheckEdges(const std::vector<int>& edge_ids, EdgeNeed
                                       const CancelToken& cancel, int64_t* checked) {
   const int64_t total = static_cast<int64_t>(edge_ids.size());
   if (total == 0) return;
-  const ProgressReporter reporter(progress, phase, total, *checker_, Clock::now());
+  const ThrottledProgress reporter(progress, phase, total, Clock::now());
+  const int64_t checks_at_start = checker_->total_collision_checks();
+  const int64_t queries_at_start = checker_->total_distance_queries();
   std::atomic<int64_t> done{0};
   ParallelFor(ResolveThreads(options_.threads), edge_ids.size(), [&](size_t k) {
     if (cancel.stopped()) return;
@@ -246,7 +229,9 @@ void HybridizationSession::CheckEdges(const std::vector<int>& edge_ids, EdgeNeed
       edge.report.collision_checks += previous.collision_checks;
       edge.report.distance_queries += previous.distance_queries;
     }
-    reporter.Done(done.fetch_add(1, std::memory_order_relaxed) + 1);
+    reporter.Done(done.fetch_add(1, std::memory_order_relaxed) + 1,
+                  checker_->total_collision_checks() - checks_at_start,
+                  checker_->total_distance_queries() - queries_at_start);
   });
   cancel.ThrowIfStopped();
   *checked += total;
@@ -560,22 +545,11 @@ MergeResult HybridizationSession::Query(const MeasureSpec& spec, const ProgressC
   MergeResult result;
   result.measure = spec;
   result.variant = options_.candidates.variant;
-  const bool first = first_query_;
-  first_query_ = false;
-  if (first) {
-    result.stats = build_stats_;
-    result.timing = build_timing_;
-  } else {
-    result.stats.nodes = build_stats_.nodes;
-    result.stats.input_edges = build_stats_.input_edges;
-    result.stats.input_edges_invalid = build_stats_.input_edges_invalid;
-    result.stats.candidate_edges = build_stats_.candidate_edges;
-    result.stats.alignments = build_stats_.alignments;
-    result.stats.radius = build_stats_.radius;
-    result.stats.gap_init = build_stats_.gap_init;
-    result.stats.gap_extend = build_stats_.gap_extend;
-    result.stats.threads = build_stats_.threads;
-  }
+  // The first query reports the build with its own work; a later one reports the same shape
+  // and only its own work.
+  const bool first = std::exchange(first_query_, false);
+  result.stats = first ? build_stats_ : ShapeOf(build_stats_);
+  result.timing = first ? build_timing_ : MergeTiming{};
   const int64_t checks_before = checker_->total_collision_checks();
   const int64_t queries_before = checker_->total_distance_queries();
   int64_t rechecked = 0;
@@ -682,17 +656,9 @@ MergeResult HybridizationSession::Query(const MeasureSpec& spec, const ProgressC
   if (result.best_input >= 0) result.best_input_objective = measure->Objective(best_quality);
   result.timing.evaluate_ms += MsSince(phase);
 
-  const int64_t query_checks = checker_->total_collision_checks() - checks_before;
-  const int64_t query_queries = checker_->total_distance_queries() - queries_before;
-  if (first) {
-    result.stats.collision_checks += query_checks;
-    result.stats.distance_queries += query_queries;
-    result.stats.edges_checked += rechecked;
-  } else {
-    result.stats.collision_checks = query_checks;
-    result.stats.distance_queries = query_queries;
-    result.stats.edges_checked = rechecked;
-  }
+  result.stats.collision_checks += checker_->total_collision_checks() - checks_before;
+  result.stats.distance_queries += checker_->total_distance_queries() - queries_before;
+  result.stats.edges_checked += rechecked;
   int64_t checked_edges = 0;
   result.stats.edges_valid = 0;
   for (int e = 0; e < graph_.num_edges(); ++e) {
@@ -701,7 +667,7 @@ MergeResult HybridizationSession::Query(const MeasureSpec& spec, const ProgressC
     if (state == EdgeState::kValid) ++result.stats.edges_valid;
   }
   result.stats.edges_reused = first ? 0 : checked_edges - rechecked;
-  result.timing.total_ms = (first ? build_timing_.total_ms : 0.0) + MsSince(started);
+  result.timing.total_ms += MsSince(started);
   return result;
 }
 

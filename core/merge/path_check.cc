@@ -125,7 +125,7 @@ PathCheckResult CheckPaths(const MotionChecker& checker, const PathCheckRequest&
   std::vector<EdgeReport> reports(jobs.size());
   const bool need_clearance = request.mode == CheckMode::kCertified;
   const int64_t total = static_cast<int64_t>(jobs.size());
-  const int64_t step = std::max<int64_t>(1, total / 100);
+  const ThrottledProgress reporter(request.progress, "check", total, started);
   std::atomic<int64_t> done{0}, checks{0}, queries{0};
   const int threads = request.threads == 0 ? DefaultConcurrency() : request.threads;
   ParallelFor(threads, jobs.size(), [&](size_t i) {
@@ -137,15 +137,7 @@ PathCheckResult CheckPaths(const MotionChecker& checker, const PathCheckRequest&
         .mode = need_clearance ? EdgeCheckMode::kClearance : EdgeCheckMode::kSampled});
     const int64_t c = checks += reports[i].collision_checks;
     const int64_t q = queries += reports[i].distance_queries;
-    const int64_t d = ++done;
-    if (request.progress && (d % step == 0 || d == total)) {
-      request.progress(Progress{.phase = "check",
-                                .done = d,
-                                .total = total,
-                                .collision_checks = c,
-                                .distance_queries = q,
-                                .elapsed_ms = MsSince(started)});
-    }
+    reporter.Done(++done, c, q);
   });
   request.cancel.ThrowIfStopped();
 

@@ -3,6 +3,8 @@
 #include <ompl/geometric/PathHybridization.h>
 #include <ompl/geometric/PathSimplifier.h>
 
+#include <cstdint>
+#include <mutex>
 #include <string>
 
 #include "core/common/error.h"
@@ -13,24 +15,24 @@ namespace ob = ompl::base;
 namespace og = ompl::geometric;
 using namespace plan_internal;
 
-InputPath ShortcutPath(const MotionChecker& checker, const InputPath& path,
-                       const ShortcutOptions& options) {
+namespace {
+
+// One path through OMPL's PathSimplifier: the path validated (two waypoints at least), OMPL seeded
+// under its lock, the simplifier made on `checker`; `simplify(simplifier, path, lock)` runs on
+// OMPL's copy of the path and releases the lock if what it runs draws no seed. Keeps start and
+// goal bit for bit.
+template <typename Simplify>
+InputPath SimplifyWithOmpl(const MotionChecker& checker, const InputPath& path, uint64_t seed,
+                           double resolution, const Simplify& simplify) {
   const Space& space = checker.space();
   ValidatePath(space, path, "path", 2);
   QuietOmplLogging();
   auto lock = LockOmplRandomness();
-  SeedOmpl(options.seed);
-  const ob::SpaceInformationPtr si = MakeSpaceInformation(checker, options.resolution);
+  SeedOmpl(seed);
+  const ob::SpaceInformationPtr si = MakeSpaceInformation(checker, resolution);
   og::PathGeometric omplPath = ToOmplPath(si, space, path);
   og::PathSimplifier simplifier(si);
-  // The simplifier's own generator is drawn; reduceVertices and shortcutPath use only it.
-  lock.unlock();
-  for (int round = 0; round < options.max_rounds; ++round) {
-    // Non-short-circuit: both heuristics run every round.
-    const bool reduced = simplifier.reduceVertices(omplPath);
-    const bool shortened = simplifier.shortcutPath(omplPath);
-    if (!reduced && !shortened) break;
-  }
+  simplify(simplifier, omplPath, lock);
   InputPath out = FromOmplPath(space, omplPath, path.name);
   // OMPL keeps the end states, but through a copy; restore them bit for bit.
   out.waypoints.front() = path.waypoints.front();
@@ -38,21 +40,30 @@ InputPath ShortcutPath(const MotionChecker& checker, const InputPath& path,
   return out;
 }
 
+}  // namespace
+
+InputPath ShortcutPath(const MotionChecker& checker, const InputPath& path,
+                       const ShortcutOptions& options) {
+  return SimplifyWithOmpl(checker, path, options.seed, options.resolution,
+                          [&](og::PathSimplifier& simplifier, og::PathGeometric& omplPath,
+                              std::unique_lock<std::mutex>& lock) {
+                            // The simplifier's own generator is drawn; reduceVertices and
+                            // shortcutPath use only it.
+                            lock.unlock();
+                            for (int round = 0; round < options.max_rounds; ++round) {
+                              // Non-short-circuit: both heuristics run every round.
+                              const bool reduced = simplifier.reduceVertices(omplPath);
+                              const bool shortened = simplifier.shortcutPath(omplPath);
+                              if (!reduced && !shortened) break;
+                            }
+                          });
+}
+
 InputPath SimplifyMaxPath(const MotionChecker& checker, const InputPath& path,
                           const SimplifyMaxOptions& options) {
-  const Space& space = checker.space();
-  ValidatePath(space, path, "path");
-  QuietOmplLogging();
-  auto lock = LockOmplRandomness();
-  SeedOmpl(options.seed);
-  const ob::SpaceInformationPtr si = MakeSpaceInformation(checker, options.resolution);
-  og::PathGeometric omplPath = ToOmplPath(si, space, path);
-  og::PathSimplifier simplifier(si);
-  simplifier.simplifyMax(omplPath);
-  InputPath out = FromOmplPath(space, omplPath, path.name);
-  out.waypoints.front() = path.waypoints.front();
-  out.waypoints.back() = path.waypoints.back();
-  return out;
+  return SimplifyWithOmpl(checker, path, options.seed, options.resolution,
+                          [](og::PathSimplifier& simplifier, og::PathGeometric& omplPath,
+                             std::unique_lock<std::mutex>&) { simplifier.simplifyMax(omplPath); });
 }
 
 InputPath OmplHybridize(const MotionChecker& checker, const std::vector<InputPath>& paths,

@@ -13,7 +13,7 @@
 #include <fstream>
 #include <functional>
 #include <iostream>
-#include <map>
+#include <iterator>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -128,9 +128,35 @@ struct Summary {
          edges_checked = NAN, search_rounds = NAN, certify_checks = NAN, limit_ratio = NAN;
 };
 
+// Each figure of a Summary: the median over the runs of what it reads from a run.
+struct SummaryFigure {
+  double Summary::*median;
+  double (*of)(const Run&);
+};
+const SummaryFigure kSummaryFigures[] = {
+    {&Summary::ms, [](const Run& r) { return r.ms; }},
+    {&Summary::length, [](const Run& r) { return r.length; }},
+    {&Summary::objective, [](const Run& r) { return r.objective; }},
+    {&Summary::hgraph_objective, [](const Run& r) { return r.hgraph_objective; }},
+    {&Summary::min_clearance, [](const Run& r) { return r.min_clearance; }},
+    {&Summary::inverse_clearance, [](const Run& r) { return r.inverse_clearance; }},
+    {&Summary::collision_checks,
+     [](const Run& r) { return static_cast<double>(r.collision_checks); }},
+    {&Summary::distance_queries,
+     [](const Run& r) { return static_cast<double>(r.distance_queries); }},
+    {&Summary::edges_checked, [](const Run& r) { return static_cast<double>(r.edges_checked); }},
+    {&Summary::search_rounds, [](const Run& r) { return static_cast<double>(r.search_rounds); }},
+    {&Summary::certify_checks, [](const Run& r) { return static_cast<double>(r.certify_checks); }},
+    {&Summary::limit_ratio,
+     [](const Run& r) {
+       return static_cast<double>(r.collision_checks + r.distance_queries) /
+              static_cast<double>(std::max<int64_t>(1, r.certify_checks));
+     }},
+};
+
 Summary Summarize(const Method& m, const std::vector<Run>& runs) {
   Summary s{.method = m.name, .label = m.label, .ompl = m.ompl};
-  std::map<std::string, std::vector<double>> f;
+  std::vector<std::vector<double>> values(std::size(kSummaryFigures));
   s.certified = !runs.empty();
   for (const Run& r : runs) {
     if (!r.ok) {
@@ -140,33 +166,10 @@ Summary Summarize(const Method& m, const std::vector<Run>& runs) {
     }
     ++s.runs_ok;
     s.certified = s.certified && r.certified;
-    f["ms"].push_back(r.ms);
-    f["length"].push_back(r.length);
-    f["objective"].push_back(r.objective);
-    f["hgraph_objective"].push_back(r.hgraph_objective);
-    f["min_clearance"].push_back(r.min_clearance);
-    f["inverse_clearance"].push_back(r.inverse_clearance);
-    f["cc"].push_back(static_cast<double>(r.collision_checks));
-    f["dq"].push_back(static_cast<double>(r.distance_queries));
-    f["edges"].push_back(static_cast<double>(r.edges_checked));
-    f["rounds"].push_back(static_cast<double>(r.search_rounds));
-    f["certify"].push_back(static_cast<double>(r.certify_checks));
-    f["ratio"].push_back(static_cast<double>(r.collision_checks + r.distance_queries) /
-                         static_cast<double>(std::max<int64_t>(1, r.certify_checks)));
+    for (size_t i = 0; i < values.size(); ++i) values[i].push_back(kSummaryFigures[i].of(r));
   }
   if (s.runs_ok == 0) return s;
-  s.ms = Median(f["ms"]);
-  s.length = Median(f["length"]);
-  s.objective = Median(f["objective"]);
-  s.hgraph_objective = Median(f["hgraph_objective"]);
-  s.min_clearance = Median(f["min_clearance"]);
-  s.inverse_clearance = Median(f["inverse_clearance"]);
-  s.collision_checks = Median(f["cc"]);
-  s.distance_queries = Median(f["dq"]);
-  s.edges_checked = Median(f["edges"]);
-  s.search_rounds = Median(f["rounds"]);
-  s.certify_checks = Median(f["certify"]);
-  s.limit_ratio = Median(f["ratio"]);
+  for (size_t i = 0; i < values.size(); ++i) s.*kSummaryFigures[i].median = Median(values[i]);
   return s;
 }
 

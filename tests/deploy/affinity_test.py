@@ -23,31 +23,23 @@ import socket
 import subprocess
 import sys
 import tempfile
-import threading
 import time
 
 import grpc
 
 import hgraph_client
 
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "integration"))
+from server_process import ServerProcess, free_port  # noqa: E402
+
 SKIP = 77
 
 
-class Replica:
+class Replica(ServerProcess):
     def __init__(self, binary, index):
         self.index = index
-        self.proc = subprocess.Popen(
-            [binary, "--listen", "127.0.0.1:0", "--metrics-listen", "", "--threads", "1",
-             "--drain-s", "0", "--grace-s", "2"],
-            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        line = self.proc.stdout.readline()
-        match = re.search(r"grpc_port=(\d+)", line)
-        if not match:
-            self.proc.kill()
-            raise RuntimeError(f"replica {index} did not start: {line!r}")
-        self.port = int(match.group(1))
-        self.log = []
-        threading.Thread(target=lambda: self.log.extend(self.proc.stderr), daemon=True).start()
+        super().__init__(binary, "--listen", "127.0.0.1:0", "--metrics-listen", "", "--threads",
+                         "1", "--drain-s", "0", "--grace-s", "2", name=f"replica {index}")
 
     def sessions(self):
         """Session names in this replica's call log lines ("<Method> session=<name> ...")."""
@@ -62,15 +54,7 @@ class Replica:
         return [l for l in list(self.log) if f" session={session}" in l]
 
     def stop(self):
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGTERM)
-            self.proc.wait(timeout=30)
-
-
-def free_port():
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
+        return super().stop(timeout=30)
 
 
 def start_nginx(deploy, replicas, work):

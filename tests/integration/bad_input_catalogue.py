@@ -283,6 +283,16 @@ def stubs(server):
     channel.close()
 
 
+def set_fields(request, fields):
+    """Sets each field of `fields` on `request`: scalars assigned, messages copied. Returns it."""
+    for key, v in fields.items():
+        if isinstance(v, (int, float, str)):
+            setattr(request, key, v)
+        else:
+            getattr(request, key).CopyFrom(v)
+    return request
+
+
 def run(stub, session, call, value):
     if call == "put_scene":
         stub.PutScene(service_pb2.PutSceneRequest(scene=value), timeout=TIMEOUT_S)
@@ -291,28 +301,15 @@ def run(stub, session, call, value):
         if call == "merge_session":
             request.session = value
         else:
-            for key, v in value.items():
-                if isinstance(v, (int, float)):
-                    setattr(request, key, v)
-                else:
-                    getattr(request, key).CopyFrom(v)
+            set_fields(request, value)
         for _ in stub.MergePaths(request, timeout=TIMEOUT_S):
             pass
     elif call == "check":
-        request = service_pb2.CheckPathsRequest(session=session, paths=paths())
-        for key, v in value.items():
-            if isinstance(v, (int, float)):
-                setattr(request, key, v)
-            else:
-                getattr(request, key).CopyFrom(v)
+        request = set_fields(service_pb2.CheckPathsRequest(session=session, paths=paths()), value)
         stub.CheckPaths(request, timeout=TIMEOUT_S)
     elif call == "plan":
-        request = service_pb2.PlanPathsRequest(session=session, time_per_path_s=0.2)
-        for key, v in value.items():
-            if isinstance(v, (int, float, str)):
-                setattr(request, key, v)
-            else:
-                getattr(request, key).CopyFrom(v)
+        request = set_fields(service_pb2.PlanPathsRequest(session=session, time_per_path_s=0.2),
+                             value)
         for _ in stub.PlanPaths(request, timeout=TIMEOUT_S):
             pass
     elif call == "upload":

@@ -12,10 +12,10 @@ import json
 import pathlib
 import re
 import shutil
-import signal
 import subprocess
 import sys
-import threading
+
+from server_process import IgnoredSigterm, ServerDidNotStart, ServerProcess
 
 CASES = {}
 
@@ -41,36 +41,27 @@ def expect(condition, message):
         raise Failure(message)
 
 
-class Server:
+class Server(ServerProcess):
     """hgraph-server on 127.0.0.1, a port it picks itself; a context manager that stops it with
     SIGTERM and expects exit 0."""
 
     def __init__(self, binary):
         if not binary:
             raise Skip("this case needs hgraph-server (--server-bin)")
-        self.proc = subprocess.Popen(
-            [binary, "--listen", "127.0.0.1:0", "--metrics-listen", "", "--threads", "2",
-             "--drain-s", "0"],
-            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        line = self.proc.stdout.readline()
-        match = re.search(r"grpc_port=(\d+)", line)
-        if not match:
-            self.proc.kill()
-            raise Failure("server did not start: %r %s" % (line, self.proc.stderr.read()))
-        self.target = "127.0.0.1:%s" % match.group(1)
-        self.log = []
-        threading.Thread(target=lambda: self.log.extend(self.proc.stderr), daemon=True).start()
+        try:
+            super().__init__(binary, "--listen", "127.0.0.1:0", "--metrics-listen", "",
+                             "--threads", "2", "--drain-s", "0")
+        except ServerDidNotStart as e:
+            raise Failure(str(e)) from None
 
     def __enter__(self):
         return self
 
     def __exit__(self, *exc):
-        self.proc.send_signal(signal.SIGTERM)
         try:
-            code = self.proc.wait(timeout=30)
-        except subprocess.TimeoutExpired:
-            self.proc.kill()
-            raise Failure("server ignored SIGTERM")
+            code = self.stop(timeout=30)
+        except IgnoredSigterm as e:
+            raise Failure(str(e)) from None
         if exc[0] is None:
             expect(code == 0, "server exited %d: %s" % (code, "".join(self.log)))
 

@@ -92,9 +92,9 @@ def merge_once(client):
 def stopped(server):
     """Stops the server and returns its whole log (the reader ends at the log's end)."""
     code = server.stop()
-    server._reader.join(timeout=10)
-    assert code == 0, "".join(server.log)
-    return "".join(server.log)
+    log = server.whole_log()
+    assert code == 0, log
+    return log
 
 
 # TLS ----------------------------------------------------------------------------------------

@@ -20,6 +20,7 @@ import pytest
 
 import hgraph_client
 from hgraph.v1 import merge_pb2, scene_pb2, service_pb2
+from server_process import ServerProcess
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 DATA = ROOT / "tests" / "data" / "circles"
@@ -27,32 +28,15 @@ SERVER = os.environ.get("HGRAPH_SERVER", str(ROOT / "build" / "hgraph-server"))
 CLI = os.environ.get("HGRAPH_CLI", str(ROOT / "build" / "hgraph"))
 
 
-class Server:
+class Server(ServerProcess):
     """One hgraph-server process on 127.0.0.1 with free ports picked by the server itself."""
 
     def __init__(self, *flags):
         threads = [] if "--threads" in flags else ["--threads", "2"]
         # No drain on SIGTERM unless a test asks for one: stopping servers stays quick.
         drain = [] if "--drain-s" in flags else ["--drain-s", "0"]
-        self.proc = subprocess.Popen(
-            [SERVER, "--listen", "127.0.0.1:0", "--metrics-listen", "127.0.0.1:0", *threads,
-             *drain, *flags],
-            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        line = self.proc.stdout.readline()
-        match = re.search(r"grpc_port=(\d+) metrics_port=(\d+)", line)
-        if not match:
-            self.proc.kill()
-            raise RuntimeError(f"server did not start: {line!r} {self.proc.stderr.read()}")
-        self.port, self.metrics_port = int(match.group(1)), int(match.group(2))
-        self.target = f"127.0.0.1:{self.port}"
-        # Drain the log so that the pipe never fills; keep it for failure messages.
-        self.log = []
-        self._reader = threading.Thread(target=self._read_log, daemon=True)
-        self._reader.start()
-
-    def _read_log(self):
-        for line in self.proc.stderr:
-            self.log.append(line)
+        super().__init__(SERVER, "--listen", "127.0.0.1:0", "--metrics-listen", "127.0.0.1:0",
+                         *threads, *drain, *flags)
 
     def client(self) -> hgraph_client.Client:
         return hgraph_client.connect(self.target)
@@ -74,15 +58,7 @@ class Server:
         return total
 
     def stop(self, timeout=20) -> int:
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGTERM)
-            try:
-                self.proc.wait(timeout=timeout)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait()
-                raise AssertionError("server ignored SIGTERM")
-        return self.proc.returncode
+        return super().stop(timeout)
 
 
 @pytest.fixture(scope="module")

@@ -33,8 +33,6 @@ import pathlib
 import random
 import re
 import secrets
-import signal
-import socket
 import subprocess
 import sys
 import tempfile
@@ -69,12 +67,14 @@ args = parse_args(sys.argv[1:])
 STUBS = args.python_path or str(pathlib.Path(args.server_binary).resolve().parent / "python")
 sys.path.insert(0, str(ROOT / "client" / "python"))
 sys.path.insert(0, STUBS)
+sys.path.insert(0, str(ROOT / "tests" / "integration"))  # server_process
 
 import grpc  # noqa: E402
 
 import hgraph_client  # noqa: E402
 from hgraph.v1 import merge_pb2, path_pb2, scene_pb2, service_pb2, service_pb2_grpc  # noqa: E402
 from google.protobuf import json_format  # noqa: E402
+from server_process import IgnoredSigterm, ServerProcess, free_port  # noqa: E402
 
 C = grpc.StatusCode
 
@@ -194,25 +194,11 @@ def mismatch_of_merge(job, result):
 # The server under test.
 
 
-def free_port():
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-class Server:
+class Server(ServerProcess):
     def __init__(self, binary, port, threads):
-        self.proc = subprocess.Popen(
-            [binary, "--listen", f"127.0.0.1:{port}", "--metrics-listen", "127.0.0.1:0",
-             "--threads", str(threads), "--drain-s", "0", "--grace-s", "2",
-             "--log-level", "warn"],
-            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        line = self.proc.stdout.readline()
-        if not re.search(r"grpc_port=(\d+)", line):
-            self.proc.kill()
-            raise RuntimeError(f"server did not start: {line!r} {self.proc.stderr.read()}")
-        self.log = []
-        threading.Thread(target=lambda: self.log.extend(self.proc.stderr), daemon=True).start()
+        super().__init__(binary, "--listen", f"127.0.0.1:{port}", "--metrics-listen", "127.0.0.1:0",
+                         "--threads", str(threads), "--drain-s", "0", "--grace-s", "2",
+                         "--log-level", "warn")
 
     def peak_rss_kib(self):
         try:
@@ -223,15 +209,10 @@ class Server:
         return int(match.group(1)) if match else 0
 
     def stop(self, timeout=60):
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGTERM)
-            try:
-                self.proc.wait(timeout=timeout)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait()
-                return "ignored SIGTERM"
-        return self.proc.returncode
+        try:
+            return super().stop(timeout)
+        except IgnoredSigterm:
+            return "ignored SIGTERM"
 
 
 # ---------------------------------------------------------------------------------------------

@@ -352,6 +352,33 @@ TEST(AdapterTest, SceneFileRejectsUnknownFieldsNamingTheFile) {
   EXPECT_EQ(missing.code(), ErrorCode::kNotFound);
 }
 
+TEST(AdapterTest, TextFilesRoundTripAndTheirErrorsNameThePath) {
+  const TempDir dir;
+  // Larger than one read of the reader, with every byte value.
+  std::string bytes;
+  for (int i = 0; i < 200000; ++i) bytes.push_back(static_cast<char>(i * 7919 % 256));
+  const std::string file = (dir.path() / "bytes.bin").string();
+  WriteTextFile(file, bytes);
+  EXPECT_EQ(ReadTextFile(file), bytes);
+  WriteTextFile(file, "");
+  EXPECT_EQ(ReadTextFile(file), "");
+
+  const std::string none = (dir.path() / "none.json").string();
+  const Error missing = ErrorOf([&] { ReadTextFile(none); });
+  EXPECT_EQ(missing.code(), ErrorCode::kNotFound);
+  EXPECT_EQ(missing.field(), none);
+  EXPECT_STREQ(missing.what(), (none + ": cannot open: No such file or directory").c_str());
+  // A path through a file is not missing: it cannot be opened.
+  const std::string through = file + "/x";
+  const Error not_dir = ErrorOf([&] { ReadTextFile(through); });
+  EXPECT_EQ(not_dir.code(), ErrorCode::kFailedPrecondition);
+  EXPECT_STREQ(not_dir.what(), (through + ": cannot open: Not a directory").c_str());
+  // A directory opens, and its read fails: an error, not an empty document.
+  const Error directory = ErrorOf([&] { ReadTextFile(dir.path().string()); });
+  EXPECT_EQ(directory.code(), ErrorCode::kFailedPrecondition);
+  EXPECT_STREQ(directory.what(), (dir.path().string() + ": read failed").c_str());
+}
+
 TEST(AdapterTest, ToJsonUsesSnakeCaseAndPrintsDefaults) {
   const std::string json = ToJson(PointRobotScene());
   EXPECT_NE(json.find("\"self_collision\": false"), std::string::npos) << json;

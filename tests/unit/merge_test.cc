@@ -244,6 +244,49 @@ TEST_F(MergeTest, RequeryReusesEveryCheck) {
   EXPECT_LE(third.quality.length, second.quality.length + 1e-12);
 }
 
+TEST_F(MergeTest, FirstQueryReportsTheBuildAndLaterOnesTheSameShapeWithOnlyTheirOwnWork) {
+  const LocalPlanner planner = MakePlanner();
+  HybridizationSession session(
+      planner,
+      MergeRequest{.paths = CirclePaths(),
+                   .options = {.candidates = {.variant = Variant::kEditDistanceNeighborhood},
+                               .evaluation = Evaluation::kEager,
+                               .optimize_ms = 0,
+                               .threads = 2}});
+  const MergeStats build = session.build_stats();
+  ASSERT_GT(build.edges_checked, 0);
+  ASSERT_GT(build.alignments, 0);
+  ASSERT_GT(build.radius, 0);
+  const MergeResult first = session.Query({});
+  const MergeResult second = session.Query({});
+  // The build's work counts in the first query only, with its phases' timing.
+  EXPECT_GE(first.stats.edges_checked, build.edges_checked);
+  EXPECT_GE(first.stats.collision_checks, build.collision_checks);
+  EXPECT_EQ(first.stats.edges_reused, 0);
+  EXPECT_EQ(first.timing.validate_ms, session.build_timing().validate_ms);
+  EXPECT_EQ(first.timing.inputs_ms, session.build_timing().inputs_ms);
+  EXPECT_EQ(second.stats.edges_checked, 0);
+  EXPECT_EQ(second.stats.collision_checks, 0);
+  EXPECT_EQ(second.stats.distance_queries, 0);
+  EXPECT_GT(second.stats.edges_reused, 0);
+  EXPECT_EQ(second.timing.validate_ms, 0);
+  EXPECT_EQ(second.timing.inputs_ms, 0);
+  EXPECT_EQ(second.timing.align_ms, 0);
+  // Every query reports the H-Graph's shape as built.
+  for (const MergeStats& stats : {first.stats, second.stats}) {
+    EXPECT_EQ(stats.nodes, build.nodes);
+    EXPECT_EQ(stats.input_edges, build.input_edges);
+    EXPECT_EQ(stats.input_edges_invalid, build.input_edges_invalid);
+    EXPECT_EQ(stats.candidate_edges, build.candidate_edges);
+    EXPECT_EQ(stats.threads, 2);
+    EXPECT_EQ(stats.alignments, build.alignments);
+    EXPECT_EQ(stats.radius, build.radius);
+    EXPECT_EQ(stats.gap_init, build.gap_init);
+    EXPECT_EQ(stats.gap_extend, build.gap_extend);
+  }
+  EXPECT_EQ(second.stats.edges_valid, first.stats.edges_valid);
+}
+
 TEST_F(MergeTest, LengthFirstThenClearancePaysOnlyForMissingProfiles) {
   const LocalPlanner planner = MakePlanner();
   HybridizationSession session(

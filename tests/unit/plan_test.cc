@@ -9,10 +9,12 @@
 #include <condition_variable>
 #include <cstdio>
 #include <cstdlib>
+#include <functional>
 #include <future>
 #include <mutex>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "core/adapter/scene_proto.h"
 #include "core/collision/collision_world.h"
@@ -233,16 +235,20 @@ TEST_F(PlanTest, ShortcutAndOmplHybridizationKeepPathsValidAndNoLonger) {
   double shortest = 1e300;
   for (const InputPath& path : planned.paths) shortest = std::min(shortest, Length(space, path));
 
-  const InputPath shortcut =
-      ShortcutPath(*maze_->planner, planned.paths[0], {.seed = 1, .resolution = maze_->resolution});
-  ExpectValid(*maze_->planner, shortcut);
-  EXPECT_EQ(shortcut.waypoints.front(), planned.paths[0].waypoints.front());
-  EXPECT_EQ(shortcut.waypoints.back(), planned.paths[0].waypoints.back());
-  EXPECT_LT(Length(space, shortcut), Length(space, planned.paths[0]));
-  // Seeded: the same seed shortcuts the same way.
-  EXPECT_EQ(shortcut.waypoints, ShortcutPath(*maze_->planner, planned.paths[0],
-                                             {.seed = 1, .resolution = maze_->resolution})
-                                    .waypoints);
+  // OMPL's shortcutting and its full simplification of one input: valid, the same ends, shorter,
+  // and seeded (the same seed simplifies the same way).
+  const InputPath& input = planned.paths[0];
+  const std::vector<std::function<InputPath()>> simplifications = {
+      [&] { return ShortcutPath(*maze_->planner, input, {.resolution = maze_->resolution}); },
+      [&] { return SimplifyMaxPath(*maze_->planner, input, {.resolution = maze_->resolution}); }};
+  for (const auto& simplify : simplifications) {
+    const InputPath simplified = simplify();
+    ExpectValid(*maze_->planner, simplified);
+    EXPECT_EQ(simplified.waypoints.front(), input.waypoints.front());
+    EXPECT_EQ(simplified.waypoints.back(), input.waypoints.back());
+    EXPECT_LT(Length(space, simplified), Length(space, input));
+    EXPECT_EQ(simplified.waypoints, simplify().waypoints);
+  }
 
   const InputPath hybrid =
       OmplHybridize(*maze_->planner, planned.paths, {.resolution = maze_->resolution});
@@ -251,11 +257,18 @@ TEST_F(PlanTest, ShortcutAndOmplHybridizationKeepPathsValidAndNoLonger) {
   EXPECT_EQ(hybrid.waypoints.back(), *maze_->scene->goal);
   EXPECT_LE(Length(space, hybrid), shortest + 1e-9);
 
-  try {
-    ShortcutPath(*maze_->planner, InputPath{.name = "one", .waypoints = {*maze_->scene->start}});
-    FAIL() << "no error";
-  } catch (const InputError& e) {
-    EXPECT_EQ(e.field(), "path");
+  // Both simplifications need an edge to work on.
+  const InputPath one{.name = "one", .waypoints = {*maze_->scene->start}};
+  for (const auto& simplify : std::vector<std::function<void()>>{
+           [&] { ShortcutPath(*maze_->planner, one); },
+           [&] { SimplifyMaxPath(*maze_->planner, one); },
+           [&] { SimplifyMaxPath(*maze_->planner, InputPath{.name = "none"}); }}) {
+    try {
+      simplify();
+      ADD_FAILURE() << "no error";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.field(), "path");
+    }
   }
 }
 

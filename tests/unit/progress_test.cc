@@ -1,0 +1,62 @@
+// ThrottledProgress (core/common/progress.h): which units of a parallel phase are reported, and
+// what each report carries.
+#include "core/common/progress.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <vector>
+
+namespace hgraph {
+namespace {
+
+// The `done` of every report for units 1..total finished in order.
+std::vector<int64_t> ReportedUnits(int64_t total) {
+  std::vector<int64_t> reported;
+  const ProgressCallback callback = [&](const Progress& p) { reported.push_back(p.done); };
+  const ThrottledProgress progress(callback, "check", total, std::chrono::steady_clock::now());
+  for (int64_t done = 1; done <= total; ++done) progress.Done(done, 0, 0);
+  return reported;
+}
+
+TEST(ThrottledProgressTest, ReportsEveryUnitOfASmallPhase) {
+  EXPECT_EQ(ReportedUnits(1), (std::vector<int64_t>{1}));
+  EXPECT_EQ(ReportedUnits(5), (std::vector<int64_t>{1, 2, 3, 4, 5}));
+  EXPECT_EQ(ReportedUnits(100).size(), 100u);
+}
+
+TEST(ThrottledProgressTest, ReportsAboutEveryPercentAndTheLastUnit) {
+  // 301 units: a step of 3, so units 3, 6, ..., 300, and 301 because it is the last.
+  const std::vector<int64_t> reported = ReportedUnits(301);
+  ASSERT_EQ(reported.size(), 101u);
+  for (size_t i = 0; i + 1 < reported.size(); ++i) {
+    EXPECT_EQ(reported[i], 3 * static_cast<int64_t>(i + 1));
+  }
+  EXPECT_EQ(reported.back(), 301);
+  EXPECT_EQ(ReportedUnits(250000).size(), 100u);
+}
+
+TEST(ThrottledProgressTest, AReportCarriesThePhaseTotalAndCounts) {
+  std::vector<Progress> reports;
+  const ProgressCallback callback = [&](const Progress& p) { reports.push_back(p); };
+  const ThrottledProgress progress(callback, "inputs", 2, std::chrono::steady_clock::now());
+  progress.Done(2, 17, 5);
+  ASSERT_EQ(reports.size(), 1u);
+  EXPECT_EQ(reports[0].phase, "inputs");
+  EXPECT_EQ(reports[0].done, 2);
+  EXPECT_EQ(reports[0].total, 2);
+  EXPECT_EQ(reports[0].collision_checks, 17);
+  EXPECT_EQ(reports[0].distance_queries, 5);
+  EXPECT_GE(reports[0].elapsed_ms, 0);
+  EXPECT_TRUE(std::isnan(reports[0].objective));
+}
+
+TEST(ThrottledProgressTest, WithoutACallbackDoneDoesNothing) {
+  const ProgressCallback none;
+  const ThrottledProgress progress(none, "check", 3, std::chrono::steady_clock::now());
+  for (int64_t done = 1; done <= 3; ++done) EXPECT_NO_THROW(progress.Done(done, 1, 1));
+}
+
+}  // namespace
+}  // namespace hgraph
