@@ -148,6 +148,8 @@ HybridizationSession::HybridizationSession(const MotionChecker& checker,
     goal_distance_[n] = space.Distance(graph_.node(n).q, graph_.node(graph_.goal()).q);
   }
   node_clearance_.assign(graph_.num_nodes(), std::numeric_limits<double>::quiet_NaN());
+  probes_.assign(graph_.num_edges(), {});
+  probe_rounds_.assign(graph_.num_edges(), 0);
   build_timing_.validate_ms = MsSince(started);
 
   // Input edges carry their clearance profile when every input is reported.
@@ -184,8 +186,8 @@ HybridizationSession::HybridizationSession(const MotionChecker& checker,
         space.Distance(graph_.node(graph_.edge(e).u).q, graph_.node(graph_.edge(e).v).q);
   }
   motion_bound_.assign(graph_.num_edges(), std::numeric_limits<double>::quiet_NaN());
-  probes_.assign(graph_.num_edges(), {});
-  probe_rounds_.assign(graph_.num_edges(), 0);
+  probes_.resize(graph_.num_edges());
+  probe_rounds_.resize(graph_.num_edges(), 0);
 
   if (eager) {
     phase = Clock::now();
@@ -215,15 +217,24 @@ void HybridizationSession::CheckEdges(const std::vector<int>& edge_ids, EdgeNeed
   std::atomic<int64_t> done{0};
   ParallelFor(ResolveThreads(options_.threads), edge_ids.size(), [&](size_t k) {
     if (cancel.stopped()) return;
-    HEdge& edge = graph_.mutable_edge(edge_ids[k]);
+    const int e = edge_ids[k];
+    HEdge& edge = graph_.mutable_edge(e);
     const EdgeReport previous = std::move(edge.report);
+    // A profile reuses the clearances known on its grid: the ends' and the probes'.
+    std::vector<ClearanceSample> known;
+    if (need == EdgeNeed::kClearance) {
+      if (!std::isnan(node_clearance_[edge.u])) known.push_back({0.0, node_clearance_[edge.u]});
+      known.insert(known.end(), probes_[e].begin(), probes_[e].end());
+      if (!std::isnan(node_clearance_[edge.v])) known.push_back({1.0, node_clearance_[edge.v]});
+    }
     edge.report = checker_->CheckEdge(EdgeCheckRequest{
         .from = &graph_.node(edge.u).q,
         .to = &graph_.node(edge.v).q,
         .mode = need == EdgeNeed::kValidity           ? EdgeCheckMode::kSampled
                 : need == EdgeNeed::kCertificate      ? EdgeCheckMode::kCertified
                 : previous.state == EdgeState::kValid ? EdgeCheckMode::kClearanceOfValid
-                                                      : EdgeCheckMode::kClearance});
+                                                      : EdgeCheckMode::kClearance,
+        .known = known.empty() ? nullptr : &known});
     // A re-check for clearance keeps counting what the first check cost.
     if (previous.state != EdgeState::kUnchecked) {
       edge.report.collision_checks += previous.collision_checks;

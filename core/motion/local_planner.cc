@@ -226,10 +226,22 @@ EdgeReport LocalPlanner::CheckEdge(const EdgeCheckRequest& request) const {
   std::vector<ClearanceSample> samples;
   grid.reserve(segments + 1);
   samples.reserve(segments + 1);
+  size_t next_known = 0;
+  // The clearance at grid point t, known or queried.
+  const auto clearance_at = [&](double t, const Config& q) {
+    if (request.known != nullptr) {
+      const std::vector<ClearanceSample>& known = *request.known;
+      while (next_known < known.size() && known[next_known].t < t) ++next_known;
+      if (next_known < known.size() && known[next_known].t == t) {
+        return known[next_known].clearance;
+      }
+    }
+    return context.Clearance(q);
+  };
   for (int k = 0; k <= segments; ++k) {
     const double t = static_cast<double>(k) / segments;
     grid.push_back(k == 0 ? from : k == segments ? to : check.At(t));
-    const double clearance = context.Clearance(grid.back());
+    const double clearance = clearance_at(t, grid.back());
     // Touching contact: valid for FCL's collision test, but not free.
     if (clearance <= 0) return invalid(t);
     samples.push_back({.t = t, .clearance = clearance});

@@ -70,6 +70,10 @@ struct EdgeCheckRequest {
   const Config* from = nullptr;
   const Config* to = nullptr;
   EdgeCheckMode mode = EdgeCheckMode::kSampled;
+  // Clearances already known at points of the profile's grid (ProbeClearance's samples, the
+  // clearance of an end at t = 0 or 1), sorted by t; a profile takes them instead of querying
+  // again. May be null.
+  const std::vector<ClearanceSample>* known = nullptr;
 };
 
 // True for the modes that record a clearance profile.
