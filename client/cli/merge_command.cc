@@ -9,8 +9,8 @@
 
 #include "client/cli/cli_common.h"
 #include "client/cli/command.h"
+#include "client/cli/merge_picture.h"
 #include "client/cli/remote.h"
-#include "client/cli/shortcut_step.h"
 #include "core/adapter/json_io.h"
 #include "core/adapter/merge_proto.h"
 #include "core/adapter/path_io.h"
@@ -43,8 +43,6 @@ struct MergeFlags {
   bool report_inputs = false;
   int threads = 0;
   bool quiet = false;
-  bool shortcut = false;
-  uint64_t shortcut_seed = 1;
   // Set when the flag was given; unset flags leave the proto field unset (core defaults).
   CLI::Option* radius_opt = nullptr;
   CLI::Option* phi_opt = nullptr;
@@ -126,25 +124,15 @@ int RunMerge(const MergeFlags& f, const MergeRunner& run, std::optional<LoadedSc
   printer.Finish();
 
   if (!f.out.empty()) WriteTextFile(f.out, ToJson(response.result));
-  // --shortcut and --svg need the scene, which this side holds: they run here, on the result.
+  // --svg needs the scene, which this side holds: it is drawn here, from the result.
   const MergeResult result = MergeResultFromProto(response.result);
-  auto scene = [&]() -> const LoadedScene& {
-    if (!*loaded) loaded->emplace(LoadScene(scene_proto, f.scene, resolution));
-    return **loaded;
-  };
-  ShortcutStep step;
-  if (f.shortcut) {
-    step =
-        ShortcutMergedPath(*scene().planner, result, result.measure, resolution, f.shortcut_seed);
-  }
-  if (!f.out_path.empty()) WritePathsFile(f.out_path, {f.shortcut ? step.path : result.path});
+  if (!f.out_path.empty()) WritePathsFile(f.out_path, {result.path});
   if (!f.svg.empty()) {
-    WriteTextFile(f.svg, RenderSvg(*scene().scene,
-                                   MergePicture(paths, result, f.shortcut ? &step : nullptr)));
+    if (!*loaded) loaded->emplace(LoadScene(scene_proto, f.scene, resolution));
+    WriteTextFile(f.svg, RenderSvg(*(*loaded)->scene, MergePicture(paths, result)));
   }
   PrintMergeTable(result);
   if (!response.hgraph.empty()) std::printf("hgraph %s\n", response.hgraph.c_str());
-  if (f.shortcut) PrintShortcutRow(step, result);
   return kExitOk;
 }
 
@@ -245,12 +233,6 @@ Subcommand AddMergeCommand(CLI::App& parent) {
                 "(always so with --evaluation eager)");
   app->add_option("--threads", f.threads, "Worker threads (0 = all cores)")->capture_default_str();
   app->add_flag("-q,--quiet", f.quiet, "No progress on stderr");
-  app->add_flag("--shortcut", f.shortcut,
-                "Then shortcut the merged path with OMPL's PathSimplifier (hybridize-then-"
-                "shortcut); --out-path and --svg get the shortcut path, --out keeps the merge's "
-                "result. With --server the shortcutting runs here, on the local scene");
-  app->add_option("--shortcut-seed", f.shortcut_seed, "Seed of the shortcutting")
-      ->capture_default_str();
   return Subcommand{
       .app = app,
       .run = [flags] { return RunLocal(*flags); },

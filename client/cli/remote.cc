@@ -13,7 +13,6 @@
 #include <vector>
 
 #include "client/cli/cli_common.h"
-#include "client/cli/shortcut_step.h"
 #include "core/adapter/json_io.h"
 #include "core/adapter/merge_proto.h"
 #include "core/adapter/ompl_cfg.h"

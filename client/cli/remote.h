@@ -2,7 +2,7 @@
 // RemoteClient speaks hgraph.v1.PathMerger (uploads only the blobs the server lacks, creates or
 // reuses a session); WithServer adds --server to an in-process subcommand and dispatches. What
 // needs the engine runs on the server (merge, plan, the checks of check and render); what needs
-// only the scene file runs here (drawing, --shortcut after a remote merge, reading .cfg files).
+// only the scene file runs here (drawing, reading .cfg files).
 #pragma once
 
 #include <grpcpp/grpcpp.h>
