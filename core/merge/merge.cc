@@ -28,8 +28,9 @@ constexpr int kLazyBatch = 8;
 
 // Probe rounds of an edge under a measure that needs clearance (RefineClearanceEdges), before
 // its profile: round r probes the odd multiples of 2^-r of the way (the middle, the quarters,
-// ...). On wrench (inverse clearance k = 3, all-pairs, node spacing 1) 3, 4, 5 and 6 rounds take
-// 90139, 73678, 70351 and 74949 distance queries and profile 1062, 645, 430 and 324 edges.
+// ...). On wrench (inverse clearance k = 3, all-pairs, node spacing 1; before profiles reused
+// the probes) 3, 4, 5 and 6 rounds took 90139, 73678, 70351 and 74949 distance queries and
+// profiled 1062, 645, 430 and 324 edges.
 constexpr int kProbeRounds = 5;
 
 // The fractions of the way each probe round asks for.
