@@ -290,6 +290,45 @@ void HybridizationSession::RefineClearanceEdges(const std::vector<int>& edge_ids
   *checked += in_contact.load();
 }
 
+void HybridizationSession::ProbeProfileGrids(const std::vector<int>& edge_ids,
+                                             const CancelToken& cancel) {
+  // Pieces of about this many grid points, so that a few long edges keep every thread busy.
+  constexpr int kPiece = 16;
+  struct Piece {
+    int edge;
+    std::vector<double> fractions;
+  };
+  std::vector<Piece> pieces;
+  for (int e : edge_ids) {
+    if (graph_.edge(e).report.state == EdgeState::kInvalid) continue;
+    const int stretches = checker_->ProfileStretches(edge_length_[e]);
+    for (int k = 1; k < stretches; k += kPiece) {
+      Piece piece{.edge = e, .fractions = {}};
+      for (int j = k; j < std::min(stretches, k + kPiece); ++j) {
+        piece.fractions.push_back(static_cast<double>(j) / stretches);
+      }
+      pieces.push_back(std::move(piece));
+    }
+  }
+  if (pieces.size() < 2) return;  // nothing to spread over threads
+  std::vector<std::vector<ClearanceSample>> found(pieces.size());
+  ParallelFor(ResolveThreads(options_.threads), pieces.size(), [&](size_t k) {
+    if (cancel.stopped()) return;
+    const HEdge& edge = graph_.edge(pieces[k].edge);
+    found[k] = checker_->ProbeClearance(graph_.node(edge.u).q, graph_.node(edge.v).q,
+                                        pieces[k].fractions, probes_[pieces[k].edge]);
+  });
+  cancel.ThrowIfStopped();
+  for (size_t k = 0; k < pieces.size(); ++k) {
+    std::vector<ClearanceSample>& known = probes_[pieces[k].edge];
+    known.insert(known.end(), found[k].begin(), found[k].end());
+  }
+  for (int e : edge_ids) {
+    std::sort(probes_[e].begin(), probes_[e].end(),
+              [](const ClearanceSample& a, const ClearanceSample& b) { return a.t < b.t; });
+  }
+}
+
 int64_t HybridizationSession::ComputeNodeClearances(const CancelToken& cancel) {
   std::vector<int> missing;
   for (int n = 0; n < graph_.num_nodes(); ++n) {
@@ -458,6 +497,7 @@ SearchResult HybridizationSession::SearchBest(const Measure& measure, EdgeNeed f
         output_recheck.push_back(e);
       }
     }
+    if (finish == EdgeNeed::kClearance) ProbeProfileGrids(output_recheck, cancel);
     CheckEdges(output_recheck, finish, "evaluate", progress, cancel, rechecked);
     result->timing.evaluate_ms += MsSince(phase);
     bool still_valid = true;

@@ -155,6 +155,10 @@ class HybridizationSession {
   // motion in contact), so an edge that stops being wanted never pays for its profile.
   void RefineClearanceEdges(const std::vector<int>& edge_ids, const ProgressCallback& progress,
                             const CancelToken& cancel, int64_t* checked);
+  // Computes the clearances on the profile grids of the edges in parallel, in pieces of each
+  // edge, before their profiles (which reuse them, EdgeCheckRequest::known): the output's few
+  // long edges would otherwise keep one thread each busy.
+  void ProbeProfileGrids(const std::vector<int>& edge_ids, const CancelToken& cancel);
   // Computes the clearance of every node that lacks one (the lazy bounds use them). Returns how
   // many it computed.
   int64_t ComputeNodeClearances(const CancelToken& cancel);

@@ -44,6 +44,7 @@ class LocalPlanner final : public MotionChecker {
   std::vector<ClearanceSample> ProbeClearance(
       const Config& from, const Config& to, const std::vector<double>& fractions,
       const std::vector<ClearanceSample>& known) const override;
+  int ProfileStretches(double length) const override { return SampleCount(length) - 1; }
   int64_t total_collision_checks() const override;
   int64_t total_distance_queries() const override;
 

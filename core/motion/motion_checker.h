@@ -118,6 +118,12 @@ class MotionChecker {
     (void)known;
     return {};
   }
+  // The number of stretches a clearance profile of a motion of this length samples (its grid
+  // has that many + 1 points, at t = k / stretches); 0 when the checker cannot say (the default).
+  virtual int ProfileStretches(double length) const {
+    (void)length;
+    return 0;
+  }
   // Totals over every query this checker ran so far (for progress and stats).
   virtual int64_t total_collision_checks() const = 0;
   virtual int64_t total_distance_queries() const = 0;

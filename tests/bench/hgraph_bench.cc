@@ -54,6 +54,7 @@ class CountingChecker final : public MotionChecker {
       const std::vector<ClearanceSample>& known) const override {
     return inner_.ProbeClearance(from, to, fractions, known);
   }
+  int ProfileStretches(double length) const override { return inner_.ProfileStretches(length); }
   int64_t total_collision_checks() const override { return inner_.total_collision_checks(); }
   int64_t total_distance_queries() const override { return inner_.total_distance_queries(); }
   int64_t edges() const { return edges_.load(); }

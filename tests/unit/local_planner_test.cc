@@ -346,6 +346,47 @@ TEST(LocalPlannerTest, ProbesAreProfileSamplesAndTightenTheBounds) {
   EXPECT_GT(tightened, compared / 2);
 }
 
+// A profile that is handed clearances known on its grid (the probes, an end's) records the same
+// samples and verdict as one that queries them all, for fewer distance queries.
+TEST(LocalPlannerTest, ProfileWithKnownGridClearancesEqualsTheFullProfile) {
+  const auto world = CircleWorld();
+  const LocalPlanner planner(world, {.resolution = 0.01});
+  const Space& space = world->space();
+  std::mt19937_64 rng(13);
+  int compared = 0, invalid = 0;
+  for (int i = 0; i < 200; ++i) {
+    const Config from = space.Sample(rng);
+    Config to = space.Sample(rng);
+    to.head<2>() = from.head<2>() + 0.2 * (to.head<2>() - from.head<2>());
+    const EdgeReport full = Check(planner, from, to, true);
+    const int stretches = planner.ProfileStretches(full.length);
+    ASSERT_EQ(stretches + 1, planner.SampleCount(full.length));
+    std::vector<double> fractions;
+    for (int k = 1; k < stretches; ++k) fractions.push_back(static_cast<double>(k) / stretches);
+    std::vector<ClearanceSample> known = planner.ProbeClearance(from, to, fractions, {});
+    ASSERT_EQ(static_cast<int>(known.size()), std::max(0, stretches - 1));
+    known.insert(known.begin(), {0.0, planner.Clearance(from)});
+    const EdgeReport reused = planner.CheckEdge(
+        {.from = &from, .to = &to, .mode = EdgeCheckMode::kClearance, .known = &known});
+    ASSERT_EQ(reused.state, full.state) << "edge " << i;
+    if (full.state != EdgeState::kValid) {
+      ++invalid;
+      continue;
+    }
+    ++compared;
+    EXPECT_EQ(reused.certified, full.certified);
+    ASSERT_EQ(reused.profile.size(), full.profile.size()) << "edge " << i;
+    for (size_t k = 0; k < full.profile.size(); ++k) {
+      EXPECT_EQ(reused.profile[k].t, full.profile[k].t);
+      EXPECT_EQ(reused.profile[k].clearance, full.profile[k].clearance);
+    }
+    // Only the far end and the refinements are queried.
+    EXPECT_EQ(reused.distance_queries, full.distance_queries - static_cast<int64_t>(known.size()));
+  }
+  EXPECT_GE(compared, 30);
+  EXPECT_GE(invalid, 5);
+}
+
 TEST(LocalPlannerTest, CountersAddUp) {
   const LocalPlanner planner(PointWorld({Box(5, 5, 2, 2)}));
   const Config a = Vec({1, 1}), b = Vec({9, 1}), c = Vec({5, 5});
