@@ -272,9 +272,7 @@ void HybridizationSession::RefineClearanceEdges(const std::vector<int>& edge_ids
                                        ProbeFractions()[probe_rounds_[e]], known);
       ++probe_rounds_[e];
     }
-    known.insert(known.end(), found.begin(), found.end());
-    std::sort(known.begin(), known.end(),
-              [](const ClearanceSample& a, const ClearanceSample& b) { return a.t < b.t; });
+    AddProbes(e, found);
     // A probe in contact: the profile would find the motion invalid there.
     for (const ClearanceSample& sample : found) {
       if (sample.clearance > 0) continue;
@@ -319,14 +317,14 @@ void HybridizationSession::ProbeProfileGrids(const std::vector<int>& edge_ids,
                                         pieces[k].fractions, probes_[pieces[k].edge]);
   });
   cancel.ThrowIfStopped();
-  for (size_t k = 0; k < pieces.size(); ++k) {
-    std::vector<ClearanceSample>& known = probes_[pieces[k].edge];
-    known.insert(known.end(), found[k].begin(), found[k].end());
-  }
-  for (int e : edge_ids) {
-    std::sort(probes_[e].begin(), probes_[e].end(),
-              [](const ClearanceSample& a, const ClearanceSample& b) { return a.t < b.t; });
-  }
+  for (size_t k = 0; k < pieces.size(); ++k) AddProbes(pieces[k].edge, found[k]);
+}
+
+void HybridizationSession::AddProbes(int e, const std::vector<ClearanceSample>& found) {
+  std::vector<ClearanceSample>& known = probes_[e];
+  known.insert(known.end(), found.begin(), found.end());
+  std::sort(known.begin(), known.end(),
+            [](const ClearanceSample& a, const ClearanceSample& b) { return a.t < b.t; });
 }
 
 int64_t HybridizationSession::ComputeNodeClearances(const CancelToken& cancel) {

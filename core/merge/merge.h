@@ -159,6 +159,8 @@ class HybridizationSession {
   // edge, before their profiles (which reuse them, EdgeCheckRequest::known): the output's few
   // long edges would otherwise keep one thread each busy.
   void ProbeProfileGrids(const std::vector<int>& edge_ids, const CancelToken& cancel);
+  // Adds probed clearances to edge e's, kept sorted by t.
+  void AddProbes(int e, const std::vector<ClearanceSample>& found);
   // Computes the clearance of every node that lacks one (the lazy bounds use them). Returns how
   // many it computed.
   int64_t ComputeNodeClearances(const CancelToken& cancel);
