@@ -528,7 +528,12 @@ SearchResult HybridizationSession::Optimize(const Measure& measure, SearchResult
     cancel.ThrowIfStopped();
     ShortcutRequest request{.path = {.name = "shortcut"},
                             .seed = static_cast<uint64_t>(round),
-                            .safety = type == MeasureType::kSafeLength ? measure.spec().safety : 0};
+                            .safety = type == MeasureType::kSafeLength ? measure.spec().safety : 0,
+                            .threads = ResolveThreads(options_.threads),
+                            .known = [this](int a, int b) -> const EdgeReport* {
+                              const int e = graph_.FindEdge(a, b);
+                              return e < 0 ? nullptr : &graph_.edge(e).report;
+                            }};
     for (int n : found.nodes) {
       request.path.waypoints.push_back(graph_.node(n).q);
       request.ids.push_back(n);
@@ -537,6 +542,15 @@ SearchResult HybridizationSession::Optimize(const Measure& measure, SearchResult
     const ShortcutResult shortcut = ShortcutCertified(*checker_, request, cancel);
     *rechecked += shortcut.edges_checked;
     ++result->stats.optimize_rounds;
+    // Motions it checked between two nodes join the H-Graph, so that no later round or search
+    // checks them again.
+    for (const auto& [a, b, report] : shortcut.id_checks) {
+      if (a == b) continue;
+      const int e = graph_.AddEdge(a, b, false);
+      if (graph_.edge(e).report.state == EdgeState::kUnchecked) {
+        graph_.mutable_edge(e).report = report;
+      }
+    }
     if (shortcut.accepted == 0) break;
     result->stats.shortcuts += shortcut.accepted;
 

@@ -1,34 +1,48 @@
 #include "core/merge/shortcut.h"
 
 #include <algorithm>
+#include <numeric>
 #include <random>
 
 #include "core/common/error.h"
+#include "core/common/parallel.h"
 #include "core/measure/measure.h"
 
 namespace hgraph {
 namespace {
 
-// The straight motion from a to b if it is proven free (and keeps `safety`), else a report that
-// is not valid.
-EdgeReport Check(const MotionChecker& checker, const Config& a, const Config& b, double safety,
-                 int64_t* checked) {
-  ++*checked;
-  EdgeReport report = checker.CheckEdge(
+// The check of the straight motion from a to b: certified, with a clearance profile when a
+// safety clearance must be kept.
+EdgeReport Check(const MotionChecker& checker, const Config& a, const Config& b, double safety) {
+  return checker.CheckEdge(
       EdgeCheckRequest{.from = &a,
                        .to = &b,
                        .mode = safety > 0 ? EdgeCheckMode::kClearance : EdgeCheckMode::kCertified});
-  const bool ok = report.state == EdgeState::kValid && report.certified &&
-                  (safety <= 0 || MinClearance(report) >= safety);
-  if (!ok) report.state = EdgeState::kInvalid;
-  return report;
 }
+
+// Whether a report proves the motion free (and keeping `safety`), so that a path may take it.
+bool ProvenFree(const EdgeReport& report, double safety) {
+  return report.state == EdgeState::kValid && report.certified && report.usable() &&
+         (safety <= 0 || (report.has_clearance && MinClearance(report) >= safety));
+}
+
+// A random shortcut of a batch: from a (fraction t0 of edge e0) to b (t1 of edge e1), what it
+// gains, and the check of its motion.
+struct Candidate {
+  size_t e0 = 0;
+  size_t e1 = 0;
+  Config a;
+  Config b;
+  double gain = 0;
+  EdgeReport report;
+};
 
 }  // namespace
 
 ShortcutResult ShortcutCertified(const MotionChecker& checker, const ShortcutRequest& request,
                                  const CancelToken& cancel) {
   const Space& space = checker.space();
+  const int threads = request.threads == 0 ? DefaultConcurrency() : std::max(1, request.threads);
   ShortcutResult out;
   out.path = request.path;
   std::vector<Config>& q = out.path.waypoints;
@@ -43,38 +57,84 @@ ShortcutResult ShortcutCertified(const MotionChecker& checker, const ShortcutReq
     for (size_t j = 0; j + 1 < q.size(); ++j) edges[j].length = space.Distance(q[j], q[j + 1]);
   }
 
-  // Waypoints whose neighbours connect directly.
-  for (size_t j = 1; j + 1 < q.size();) {
+  // Waypoints whose neighbours connect directly. A pass checks every waypoint not yet settled
+  // and drops those whose check passed, left to right, never two neighbours (the second one's
+  // check joined a waypoint the first one removed); a drop unsettles the neighbours.
+  std::vector<char> settled(q.size(), 0);
+  for (;;) {
     cancel.ThrowIfStopped();
-    if (space.Distance(q[j - 1], q[j + 1]) >= edges[j - 1].length + edges[j].length) {
-      ++j;
-      continue;
+    std::vector<size_t> tried;
+    for (size_t j = 1; j + 1 < q.size(); ++j) {
+      if (settled[j]) continue;
+      if (space.Distance(q[j - 1], q[j + 1]) >= edges[j - 1].length + edges[j].length) {
+        settled[j] = 1;
+        continue;
+      }
+      tried.push_back(j);
     }
-    EdgeReport joined = Check(checker, q[j - 1], q[j + 1], request.safety, &out.edges_checked);
-    if (joined.state != EdgeState::kValid) {
-      ++j;
-      continue;
+    if (tried.empty()) break;
+    std::vector<EdgeReport> joined(tried.size());
+    std::vector<char> from_caller(tried.size(), 0);
+    for (size_t k = 0; k < tried.size(); ++k) {
+      const size_t j = tried[k];
+      if (!request.known || ids[j - 1] < 0 || ids[j + 1] < 0) continue;
+      const EdgeReport* known = request.known(ids[j - 1], ids[j + 1]);
+      // Taken when it settles the question: free, or not free whatever the safety.
+      if (known == nullptr || (!ProvenFree(*known, request.safety) &&
+                               known->state != EdgeState::kInvalid && known->usable())) {
+        continue;
+      }
+      joined[k] = *known;
+      from_caller[k] = 1;
     }
-    q.erase(q.begin() + static_cast<std::ptrdiff_t>(j));
-    ids.erase(ids.begin() + static_cast<std::ptrdiff_t>(j));
-    edges.erase(edges.begin() + static_cast<std::ptrdiff_t>(j));
-    edges[j - 1] = std::move(joined);
-    ++out.accepted;
+    ParallelFor(threads, tried.size(), [&](size_t k) {
+      if (from_caller[k] || cancel.stopped()) return;
+      const size_t j = tried[k];
+      joined[k] = Check(checker, q[j - 1], q[j + 1], request.safety);
+    });
+    cancel.ThrowIfStopped();
+    std::vector<size_t> drops;
+    std::vector<EdgeReport> drop_reports;
+    for (size_t k = 0; k < tried.size(); ++k) {
+      const size_t j = tried[k];
+      if (!from_caller[k]) {
+        ++out.edges_checked;
+        if (ids[j - 1] >= 0 && ids[j + 1] >= 0) {
+          out.id_checks.emplace_back(ids[j - 1], ids[j + 1], joined[k]);
+        }
+      }
+      settled[j] = 1;
+      if (!ProvenFree(joined[k], request.safety)) continue;
+      if (!drops.empty() && drops.back() + 1 == j) {
+        settled[j] = 0;  // its left neighbour goes: try again with the new one
+        continue;
+      }
+      drops.push_back(j);
+      drop_reports.push_back(std::move(joined[k]));
+    }
+    for (size_t d = drops.size(); d-- > 0;) {
+      const size_t j = drops[d];
+      q.erase(q.begin() + static_cast<std::ptrdiff_t>(j));
+      ids.erase(ids.begin() + static_cast<std::ptrdiff_t>(j));
+      edges.erase(edges.begin() + static_cast<std::ptrdiff_t>(j));
+      edges[j - 1] = std::move(drop_reports[d]);
+      settled.erase(settled.begin() + static_cast<std::ptrdiff_t>(j));
+      settled[j - 1] = 0;
+      settled[j] = 0;
+      ++out.accepted;
+    }
   }
 
-  // Random pairs of points along the path.
+  // Random pairs of points along the path, a batch at a time.
   std::mt19937_64 rng(request.seed);
   const int attempts =
       request.attempts > 0 ? request.attempts : std::max(50, 10 * static_cast<int>(q.size()));
-  for (int attempt = 0; attempt < attempts && q.size() >= 2; ++attempt) {
+  for (int attempt = 0; attempt < attempts && q.size() >= 2;) {
     cancel.ThrowIfStopped();
     double total = 0;
     for (const EdgeReport& e : edges) total += e.length;
     if (total <= 0) break;
     std::uniform_real_distribution<double> position(0.0, total);
-    double s0 = position(rng);
-    double s1 = position(rng);
-    if (s0 > s1) std::swap(s0, s1);
     // Edge index and fraction of a position along the path.
     const auto locate = [&](double s, size_t* edge, double* t) {
       double at = 0;
@@ -87,52 +147,84 @@ ShortcutResult ShortcutCertified(const MotionChecker& checker, const ShortcutReq
         at += edges[j].length;
       }
     };
-    size_t e0 = 0, e1 = 0;
-    double t0 = 0, t1 = 0;
-    locate(s0, &e0, &t0);
-    locate(s1, &e1, &t1);
-    if (e0 == e1) continue;  // one straight edge: nothing to gain
-    const Config a = space.Interpolate(q[e0], q[e0 + 1], t0);
-    const Config b = space.Interpolate(q[e1], q[e1 + 1], t1);
-    const double direct = space.Distance(a, b);
-    // What the stretch from a to b costs now, along the path.
-    double along = (1 - t0) * edges[e0].length + t1 * edges[e1].length;
-    for (size_t j = e0 + 1; j < e1; ++j) along += edges[j].length;
-    if (direct >= along * (1 - 1e-9)) continue;
-    EdgeReport bridge = Check(checker, a, b, request.safety, &out.edges_checked);
-    if (bridge.state != EdgeState::kValid) continue;
-    // The pieces of the cut edges up to a and from b are parts of motions already accepted:
-    // they keep their edge's verdict (a merge profiles its output's edges at the end, which
-    // would find anything a sampled check missed).
-    const auto piece = [&](const EdgeReport& whole, const Config& from, const Config& to) {
-      return EdgeReport{.state = whole.state,
-                        .length = space.Distance(from, to),
-                        .certified = whole.certified && !whole.has_clearance};
-    };
-    EdgeReport head = piece(edges[e0], q[e0], a);
-    EdgeReport tail = piece(edges[e1], b, q[e1 + 1]);
-    std::vector<Config> nq(q.begin(), q.begin() + static_cast<std::ptrdiff_t>(e0 + 1));
-    std::vector<int> ni(ids.begin(), ids.begin() + static_cast<std::ptrdiff_t>(e0 + 1));
-    std::vector<EdgeReport> ne(edges.begin(), edges.begin() + static_cast<std::ptrdiff_t>(e0));
-    // Zero-length pieces (a point at a waypoint) are left out.
-    if (head.length > 0) {
-      nq.push_back(a);
-      ni.push_back(-1);
-      ne.push_back(std::move(head));
+    std::vector<Candidate> batch;
+    for (int drawn = 0; drawn < kShortcutBatch && attempt < attempts; ++drawn, ++attempt) {
+      double s0 = position(rng);
+      double s1 = position(rng);
+      if (s0 > s1) std::swap(s0, s1);
+      Candidate c;
+      double t0 = 0, t1 = 0;
+      locate(s0, &c.e0, &t0);
+      locate(s1, &c.e1, &t1);
+      if (c.e0 == c.e1) continue;  // one straight edge: nothing to gain
+      c.a = space.Interpolate(q[c.e0], q[c.e0 + 1], t0);
+      c.b = space.Interpolate(q[c.e1], q[c.e1 + 1], t1);
+      const double direct = space.Distance(c.a, c.b);
+      // What the stretch from a to b costs now, along the path.
+      double along = (1 - t0) * edges[c.e0].length + t1 * edges[c.e1].length;
+      for (size_t j = c.e0 + 1; j < c.e1; ++j) along += edges[j].length;
+      if (direct >= along * (1 - 1e-9)) continue;
+      c.gain = along - direct;
+      batch.push_back(std::move(c));
     }
-    ne.push_back(std::move(bridge));
-    if (tail.length > 0) {
-      nq.push_back(b);
-      ni.push_back(-1);
-      ne.push_back(std::move(tail));
+    if (batch.empty()) continue;
+    ParallelFor(threads, batch.size(), [&](size_t k) {
+      if (cancel.stopped()) return;
+      batch[k].report = Check(checker, batch[k].a, batch[k].b, request.safety);
+    });
+    cancel.ThrowIfStopped();
+    out.edges_checked += static_cast<int64_t>(batch.size());
+    // The free ones that gain most, no two sharing an edge of the path; applied from the end of
+    // the path so that the edge indices of the others stay valid.
+    std::vector<size_t> order(batch.size());
+    std::iota(order.begin(), order.end(), 0);
+    std::stable_sort(order.begin(), order.end(),
+                     [&](size_t x, size_t y) { return batch[x].gain > batch[y].gain; });
+    std::vector<size_t> taken;
+    for (size_t k : order) {
+      if (!ProvenFree(batch[k].report, request.safety)) continue;
+      const bool overlaps = std::any_of(taken.begin(), taken.end(), [&](size_t o) {
+        return !(batch[k].e1 < batch[o].e0 || batch[o].e1 < batch[k].e0);
+      });
+      if (!overlaps) taken.push_back(k);
     }
-    nq.insert(nq.end(), q.begin() + static_cast<std::ptrdiff_t>(e1 + 1), q.end());
-    ni.insert(ni.end(), ids.begin() + static_cast<std::ptrdiff_t>(e1 + 1), ids.end());
-    ids = std::move(ni);
-    ne.insert(ne.end(), edges.begin() + static_cast<std::ptrdiff_t>(e1 + 1), edges.end());
-    q = std::move(nq);
-    edges = std::move(ne);
-    ++out.accepted;
+    std::sort(taken.begin(), taken.end(),
+              [&](size_t x, size_t y) { return batch[x].e0 > batch[y].e0; });
+    for (size_t k : taken) {
+      Candidate& c = batch[k];
+      // The pieces of the cut edges up to a and from b are parts of motions already accepted:
+      // they keep their edge's verdict (a merge profiles its output's edges at the end, which
+      // would find anything a sampled check missed).
+      const auto piece = [&](const EdgeReport& whole, const Config& from, const Config& to) {
+        return EdgeReport{.state = whole.state,
+                          .length = space.Distance(from, to),
+                          .certified = whole.certified && !whole.has_clearance};
+      };
+      EdgeReport head = piece(edges[c.e0], q[c.e0], c.a);
+      EdgeReport tail = piece(edges[c.e1], c.b, q[c.e1 + 1]);
+      std::vector<Config> nq(q.begin(), q.begin() + static_cast<std::ptrdiff_t>(c.e0 + 1));
+      std::vector<int> ni(ids.begin(), ids.begin() + static_cast<std::ptrdiff_t>(c.e0 + 1));
+      std::vector<EdgeReport> ne(edges.begin(), edges.begin() + static_cast<std::ptrdiff_t>(c.e0));
+      // Zero-length pieces (a point at a waypoint) are left out.
+      if (head.length > 0) {
+        nq.push_back(c.a);
+        ni.push_back(-1);
+        ne.push_back(std::move(head));
+      }
+      ne.push_back(std::move(c.report));
+      if (tail.length > 0) {
+        nq.push_back(c.b);
+        ni.push_back(-1);
+        ne.push_back(std::move(tail));
+      }
+      nq.insert(nq.end(), q.begin() + static_cast<std::ptrdiff_t>(c.e1 + 1), q.end());
+      ni.insert(ni.end(), ids.begin() + static_cast<std::ptrdiff_t>(c.e1 + 1), ids.end());
+      ne.insert(ne.end(), edges.begin() + static_cast<std::ptrdiff_t>(c.e1 + 1), edges.end());
+      q = std::move(nq);
+      ids = std::move(ni);
+      edges = std::move(ne);
+      ++out.accepted;
+    }
   }
   return out;
 }

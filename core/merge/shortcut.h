@@ -6,6 +6,8 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
+#include <tuple>
 #include <vector>
 
 #include "core/common/progress.h"
@@ -26,6 +28,13 @@ struct ShortcutRequest {
   // > 0: a shortcut must also keep this clearance everywhere (safe length); its edges then
   // carry clearance profiles.
   double safety = 0;
+  // Threads that check a batch of shortcuts at once (0 = all cores). The result does not depend
+  // on it: the batches are fixed, only their checks run in parallel.
+  int threads = 1;
+  // The report of the motion between the waypoints with ids a and b when the caller already
+  // knows it (an H-Graph edge); nullptr when it does not. Only a report that is invalid, or
+  // valid and certified, is taken instead of a check. May be empty.
+  std::function<const EdgeReport*(int a, int b)> known;
 };
 
 struct ShortcutResult {
@@ -34,12 +43,20 @@ struct ShortcutResult {
   std::vector<int> ids;           // per waypoint: the request's id, -1 for a new point
   int accepted = 0;               // shortcuts taken
   int64_t edges_checked = 0;
+  // The motions checked between two waypoints that carry ids (a, b, report), so that the caller
+  // can keep them.
+  std::vector<std::tuple<int, int, EdgeReport>> id_checks;
 };
 
-// Shortens the path: first drops each waypoint whose neighbours connect, then tries seeded
-// random pairs of points. Keeps the endpoints; never lengthens the path. Single-threaded (each
-// accepted shortcut changes the path the next one is drawn on); thread safe if the checker is.
-// Throws Error(kCancelled / kDeadlineExceeded) when stopped.
+// Shortens the path: first drops waypoints whose neighbours connect, then tries seeded random
+// pairs of points. Keeps the endpoints; never lengthens the path. Both steps work in batches
+// whose checks run in parallel: the waypoints to drop are checked together and non-neighbouring
+// ones dropped, until none is left to try; the random pairs are drawn kShortcutBatch at a time
+// on the current path, and of those proven free the ones that gain most and share no edge of
+// the path are taken. Thread safe if the checker is. Throws Error(kCancelled /
+// kDeadlineExceeded) when stopped.
+inline constexpr int kShortcutBatch = 8;
+
 ShortcutResult ShortcutCertified(const MotionChecker& checker, const ShortcutRequest& request,
                                  const CancelToken& cancel = {});
 

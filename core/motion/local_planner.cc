@@ -86,12 +86,14 @@ class EdgeCheck {
     return RobotMotionBound(space_, body_component_, body_radius_, a, b);
   }
 
-  // Certifies the stretch between two profile samples, halving it while the certificate fails.
-  // Appends the midpoints it queries to `out` in order of t. Returns false if one collides.
+  // Certifies the stretch between two profile samples, halving it while the certificate fails,
+  // at most max_depth times. Appends the midpoints it queries to `out` in order of t. Returns
+  // false if one collides.
   bool Refine(const ClearanceSample& lo, const Config& q_lo, const ClearanceSample& hi,
-              const Config& q_hi, int depth, std::vector<ClearanceSample>& out) {
+              const Config& q_hi, int depth, std::vector<ClearanceSample>& out,
+              int max_depth = LocalPlanner::kMaxRefineDepth) {
     if (lo.clearance + hi.clearance > MotionBound(q_lo, q_hi)) return true;
-    if (depth == LocalPlanner::kMaxRefineDepth) {
+    if (depth >= max_depth) {
       certified_ = false;
       return true;
     }
@@ -103,9 +105,9 @@ class EdgeCheck {
       return false;
     }
     const ClearanceSample sample{.t = mid.t, .clearance = clearance};
-    if (!Refine(lo, q_lo, sample, q_mid, depth + 1, out)) return false;
+    if (!Refine(lo, q_lo, sample, q_mid, depth + 1, out, max_depth)) return false;
     out.push_back(sample);
-    return Refine(sample, q_mid, hi, q_hi, depth + 1, out);
+    return Refine(sample, q_mid, hi, q_hi, depth + 1, out, max_depth);
   }
 
   bool certified() const { return certified_; }
@@ -199,22 +201,43 @@ EdgeReport LocalPlanner::CheckEdge(const EdgeCheckRequest& request) const {
   report.state = EdgeState::kValid;
   if (request.mode == EdgeCheckMode::kSampled) return finish();
   if (request.mode == EdgeCheckMode::kCertified) {
-    // Conservative advancement (see EdgeCheckMode::kCertified). The motion bound is linear in t
-    // along a straight motion, so a clearance c at t frees [t, t + c / bound).
+    // Conservative advancement (see EdgeCheckMode::kCertified), two-sided: the motion bound is
+    // linear in t along a straight motion, so a clearance c at t frees the robot for c / bound
+    // of the way on either side of t. The next sample goes where, were its clearance c too, the
+    // two would just cover the stretch between them; a stretch they do not cover is halved
+    // (EdgeCheck::Refine) down to the profile's finest refinement. Where clearance changes
+    // slowly this takes half the queries of advancing by c / bound from each sample.
     const double bound = check.MotionBound(from, to);
     const double finest = 1.0 / (static_cast<double>(segments) * (1 << kMaxRefineDepth));
     constexpr double kMargin = 0.999;
-    double t = 0;
+    EdgeCheck advance(s, impl_->body_component, impl_->body_radius, context, from, to);
+    std::vector<ClearanceSample> midpoints;  // Refine's queries; no profile is kept
+    ClearanceSample a{.t = 0, .clearance = context.Clearance(from)};
+    if (a.clearance <= 0) return invalid(0.0);
+    Config q_a = from;
     bool advanced = true;
-    while (t < 1) {
-      const double clearance = context.Clearance(t == 0 ? from : check.At(t));
-      if (clearance <= 0) return invalid(t);
-      const double step = bound > 0 ? kMargin * clearance / bound : 1.0;
-      if (step < finest) {
+    while (a.t < 1) {
+      const double reach = bound > 0 ? kMargin * a.clearance / bound : 1.0;
+      if (reach < finest) {
         advanced = false;
         break;
       }
-      t = std::min(1.0, t + step);
+      ClearanceSample b{.t = std::min(1.0, a.t + 2 * reach)};
+      Config q_b = b.t == 1.0 ? to : check.At(b.t);
+      b.clearance = context.Clearance(q_b);
+      if (b.clearance <= 0) return invalid(b.t);
+      // Halvings of [a.t, b.t] that stay at least `finest` long.
+      const int depth = std::max(0, static_cast<int>(std::floor(std::log2((b.t - a.t) / finest))));
+      midpoints.clear();
+      if (!advance.Refine(a, q_a, b, q_b, 0, midpoints, depth)) {
+        return invalid(advance.invalid_at());
+      }
+      if (!advance.certified()) {
+        advanced = false;
+        break;
+      }
+      a = b;
+      q_a = std::move(q_b);
     }
     if (advanced) {
       report.certified = true;

@@ -110,9 +110,8 @@ int64_t ForcedInvalidEdges(const HGraph& graph, double optimum) {
   for (int e = 0; e < graph.num_edges(); ++e) {
     const HEdge& edge = graph.edge(e);
     if (edge.report.state == EdgeState::kValid && edge.report.usable()) continue;
-    const double through =
-        edge.report.length + std::min(from_start[edge.u] + to_goal[edge.v],
-                                      from_start[edge.v] + to_goal[edge.u]);
+    const double through = edge.report.length + std::min(from_start[edge.u] + to_goal[edge.v],
+                                                         from_start[edge.v] + to_goal[edge.u]);
     if (through < below) ++forced;
   }
   return forced;

@@ -1,0 +1,126 @@
+// Certified partial shortcuts (core/merge/shortcut.h) on the OMPL circles scene: the result is
+// shorter, keeps the endpoints, is certified edge by edge, does not depend on the thread count,
+// and reuses the motions its caller already knows instead of checking them again.
+#include "core/merge/shortcut.h"
+
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <vector>
+
+#include "core/collision/collision_world.h"
+#include "core/merge/path_check.h"
+#include "core/motion/local_planner.h"
+#include "tests/unit/test_scenes.h"
+
+namespace hgraph {
+namespace {
+
+using testing::CirclePaths;
+using testing::CirclesScene;
+
+class ShortcutTest : public ::testing::Test {
+ protected:
+  ShortcutTest()
+      : planner_(std::make_shared<CollisionWorld>(CirclesScene())), path_(CirclePaths()[0]) {}
+
+  // The input path with an id per waypoint (its index).
+  ShortcutRequest Request() const {
+    ShortcutRequest request{.path = path_, .seed = 7};
+    for (size_t j = 0; j < path_.waypoints.size(); ++j) {
+      request.ids.push_back(static_cast<int>(j));
+    }
+    return request;
+  }
+
+  static double Length(const Space& space, const InputPath& path) {
+    double length = 0;
+    for (size_t j = 0; j + 1 < path.waypoints.size(); ++j) {
+      length += space.Distance(path.waypoints[j], path.waypoints[j + 1]);
+    }
+    return length;
+  }
+
+  LocalPlanner planner_;
+  InputPath path_;
+};
+
+TEST_F(ShortcutTest, ShortensKeepsTheEndpointsAndEveryEdgeIsCertified) {
+  const ShortcutResult r = ShortcutCertified(planner_, Request());
+  const Space& space = planner_.space();
+  ASSERT_GT(r.accepted, 0);
+  EXPECT_LT(Length(space, r.path), Length(space, path_) * (1 - 1e-3));
+  EXPECT_TRUE(r.path.waypoints.front().isApprox(path_.waypoints.front()));
+  EXPECT_TRUE(r.path.waypoints.back().isApprox(path_.waypoints.back()));
+  ASSERT_EQ(r.edges.size() + 1, r.path.waypoints.size());
+  ASSERT_EQ(r.ids.size(), r.path.waypoints.size());
+  for (size_t j = 0; j < r.edges.size(); ++j) {
+    EXPECT_EQ(r.edges[j].state, EdgeState::kValid) << "edge " << j;
+    EXPECT_NEAR(r.edges[j].length, space.Distance(r.path.waypoints[j], r.path.waypoints[j + 1]),
+                1e-9);
+    // Kept input waypoints carry their id, points the shortcuts made carry -1.
+    if (r.ids[j] >= 0) {
+      EXPECT_TRUE(r.path.waypoints[j].isApprox(path_.waypoints[r.ids[j]]));
+    }
+  }
+  const PathCheckResult check = CheckPaths(planner_, PathCheckRequest{.paths = {r.path}});
+  ASSERT_EQ(check.paths.size(), 1u);
+  EXPECT_TRUE(check.paths[0].valid);
+  EXPECT_TRUE(check.paths[0].certified);
+}
+
+TEST_F(ShortcutTest, TheThreadCountDoesNotChangeTheResult) {
+  ShortcutRequest request = Request();
+  request.threads = 1;
+  const ShortcutResult one = ShortcutCertified(planner_, request);
+  request.threads = 2;
+  const ShortcutResult two = ShortcutCertified(planner_, request);
+  ASSERT_EQ(one.path.waypoints.size(), two.path.waypoints.size());
+  for (size_t j = 0; j < one.path.waypoints.size(); ++j) {
+    EXPECT_EQ(one.path.waypoints[j], two.path.waypoints[j]) << "waypoint " << j;
+  }
+  EXPECT_EQ(one.ids, two.ids);
+  EXPECT_EQ(one.accepted, two.accepted);
+  EXPECT_EQ(one.edges_checked, two.edges_checked);
+}
+
+TEST_F(ShortcutTest, MotionsTheCallerKnowsAreNotCheckedAgain) {
+  // Only the pass that drops waypoints: one random pair at most.
+  ShortcutRequest request = Request();
+  request.attempts = 1;
+  const ShortcutResult plain = ShortcutCertified(planner_, request);
+  // Every motion it checked between two waypoints with ids is handed back.
+  ASSERT_FALSE(plain.id_checks.empty());
+  EXPECT_GE(plain.edges_checked, static_cast<int64_t>(plain.id_checks.size()));
+  for (const auto& [a, b, report] : plain.id_checks) {
+    const EdgeReport again = planner_.CheckEdge({.from = &path_.waypoints[a],
+                                                 .to = &path_.waypoints[b],
+                                                 .mode = EdgeCheckMode::kCertified});
+    EXPECT_EQ(report.state, again.state) << a << "-" << b;
+  }
+
+  // The caller knows every such motion: none is checked again, and the verdicts it knows are
+  // the ones taken.
+  request.known = [&](int a, int b) -> const EdgeReport* {
+    for (const auto& [ka, kb, report] : plain.id_checks) {
+      if (ka == a && kb == b) return &report;
+    }
+    return nullptr;
+  };
+  const ShortcutResult reused = ShortcutCertified(planner_, request);
+  EXPECT_TRUE(reused.id_checks.empty());
+  EXPECT_EQ(reused.edges_checked,
+            plain.edges_checked - static_cast<int64_t>(plain.id_checks.size()));
+  EXPECT_EQ(reused.ids, plain.ids);
+
+  // A caller that knows every motion between waypoints to be blocked: nothing is dropped.
+  const EdgeReport blocked{.state = EdgeState::kInvalid};
+  request.known = [&](int, int) { return &blocked; };
+  const ShortcutResult none = ShortcutCertified(planner_, request);
+  EXPECT_TRUE(none.id_checks.empty());
+  EXPECT_LE(none.edges_checked, 1);
+  EXPECT_LE(none.accepted, 1);
+}
+
+}  // namespace
+}  // namespace hgraph
