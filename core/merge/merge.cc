@@ -50,6 +50,10 @@ const std::vector<std::vector<double>>& ProbeFractions() {
 // The automatic post-optimization's budget, and the gain below which a round ends it.
 constexpr double kAutomaticOptimizeMs = 2000;
 constexpr double kOptimizeMinGain = 1e-3;
+// Rounds of corner cuts (ShortcutRequest::corners_only) after the random rounds, length only.
+// On the 14 kept benchmark problems they took the geometric mean of the length ratios to the
+// best OMPL pipeline from 0.952 to 0.942 (one round: 0.949), for 32% more checks.
+constexpr int kPolishRounds = 3;
 
 int ResolveThreads(int threads) {
   if (threads < 0) throw InputError("options.threads", "must be >= 0 (0 = all cores)");
@@ -524,11 +528,23 @@ SearchResult HybridizationSession::Optimize(const Measure& measure, SearchResult
       build_stats_.radius > 0 ? build_stats_.radius : 2 * MeanInputEdgeLength(graph_, space);
   double objective = measure.Objective(EvaluateEdges(graph_, best.edges, measure.spec().k));
   SearchResult found = best;
+  // Rounds of random shortcuts, each re-hybridized, while they gain; then polishing rounds that
+  // cut the corners of the path found (kPolishRounds at most, while they gain).
+  // (Length only: under safe length a cut's pieces would need profiles of their own.)
+  int polish_rounds = -1;  // -1 during the random rounds
+  // Whether the rounds go on after one that did not gain: only into the polish.
+  const auto start_polish = [&] {
+    if (polish_rounds >= 0 || type != MeasureType::kLength) return false;
+    polish_rounds = 0;
+    return true;
+  };
   for (int round = 1; MsSince(started) < budget_ms; ++round) {
     cancel.ThrowIfStopped();
+    const bool polishing = polish_rounds >= 0;
     ShortcutRequest request{.path = {.name = "shortcut"},
                             .seed = static_cast<uint64_t>(round),
                             .safety = type == MeasureType::kSafeLength ? measure.spec().safety : 0,
+                            .corners_only = polishing,
                             .threads = ResolveThreads(options_.threads),
                             .known = [this](int a, int b) -> const EdgeReport* {
                               const int e = graph_.FindEdge(a, b);
@@ -551,7 +567,11 @@ SearchResult HybridizationSession::Optimize(const Measure& measure, SearchResult
         graph_.mutable_edge(e).report = report;
       }
     }
-    if (shortcut.accepted == 0) break;
+    // A round that does not gain ends the random rounds (the polish starts) or the polish.
+    if (shortcut.accepted == 0) {
+      if (!start_polish()) break;
+      continue;
+    }
     result->stats.shortcuts += shortcut.accepted;
 
     // The shortcut path joins the H-Graph: its new points as nodes, its checked edges with their
@@ -570,15 +590,25 @@ SearchResult HybridizationSession::Optimize(const Measure& measure, SearchResult
         graph_.mutable_edge(e).report = shortcut.edges[j];
       }
     }
-    for (int u : fresh) {
-      for (int v = 0; v < graph_.num_nodes(); ++v) {
-        if (v == u || space.Distance(graph_.node(u).q, graph_.node(v).q) > reach) continue;
-        graph_.AddEdge(u, v, false);
+    SearchResult next;
+    if (polishing) {
+      // The polished path itself: every edge proven free (the cuts) or a piece of one.
+      next.found = true;
+      for (size_t j = 0; j < ids.size(); ++j) {
+        if (!next.nodes.empty() && next.nodes.back() == ids[j]) continue;
+        if (!next.nodes.empty()) next.edges.push_back(graph_.FindEdge(next.nodes.back(), ids[j]));
+        next.nodes.push_back(ids[j]);
       }
+    } else {
+      for (int u : fresh) {
+        for (int v = 0; v < graph_.num_nodes(); ++v) {
+          if (v == u || space.Distance(graph_.node(u).q, graph_.node(v).q) > reach) continue;
+          graph_.AddEdge(u, v, false);
+        }
+      }
+      // Certified, so that every objective streamed is that of a certified path.
+      next = SearchBest(measure, EdgeNeed::kCertificate, progress, cancel, result, rechecked);
     }
-    // Certified, so that every objective streamed is that of a certified path.
-    SearchResult next =
-        SearchBest(measure, EdgeNeed::kCertificate, progress, cancel, result, rechecked);
     const double next_objective =
         measure.Objective(EvaluateEdges(graph_, next.edges, measure.spec().k));
     const bool improved = next_objective < objective * (1 - kOptimizeMinGain);
@@ -595,7 +625,11 @@ SearchResult HybridizationSession::Optimize(const Measure& measure, SearchResult
                           .objective = objective});
       }
     }
-    if (!improved) break;
+    if (!improved) {
+      if (!start_polish()) break;
+    } else if (polishing && ++polish_rounds == kPolishRounds) {
+      break;
+    }
   }
   result->timing.optimize_ms += MsSince(started);
   return found;

@@ -26,6 +26,16 @@ bool ProvenFree(const EdgeReport& report, double safety) {
          (safety <= 0 || (report.has_clearance && MinClearance(report) >= safety));
 }
 
+// Random pairs tried per pass by default: this many per waypoint, at least kMinAttempts. With
+// the merge's rounds (each re-hybridized, then a polish of corner cuts), 5 and 30 did as well as
+// 10 and 50 for 11% less work on the 14 kept benchmark problems (hgraph-bench seeds 1 and 2:
+// collision checks + 10 x distance queries 524k against 589k before the polish; lengths, as a
+// geometric mean of the ratios to the best OMPL pipeline, 0.942 against 0.946).
+constexpr int kAttemptsPerWaypoint = 5;
+constexpr int kMinAttempts = 30;
+// The smallest fraction of an edge a corner cut tries.
+constexpr double kMinCornerCut = 1.0 / 16;
+
 // A random shortcut of a batch: from a (fraction t0 of edge e0) to b (t1 of edge e1), what it
 // gains, and the check of its motion.
 struct Candidate {
@@ -60,7 +70,7 @@ ShortcutResult ShortcutCertified(const MotionChecker& checker, const ShortcutReq
   // Waypoints whose neighbours connect directly. A pass checks every waypoint not yet settled
   // and drops those whose check passed, left to right, never two neighbours (the second one's
   // check joined a waypoint the first one removed); a drop unsettles the neighbours.
-  std::vector<char> settled(q.size(), 0);
+  std::vector<char> settled(q.size(), request.corners_only ? 1 : 0);
   for (;;) {
     cancel.ThrowIfStopped();
     std::vector<size_t> tried;
@@ -128,7 +138,10 @@ ShortcutResult ShortcutCertified(const MotionChecker& checker, const ShortcutReq
   // Random pairs of points along the path, a batch at a time.
   std::mt19937_64 rng(request.seed);
   const int attempts =
-      request.attempts > 0 ? request.attempts : std::max(50, 10 * static_cast<int>(q.size()));
+      request.corners_only ? 0
+      : request.attempts > 0
+          ? request.attempts
+          : std::max(kMinAttempts, kAttemptsPerWaypoint * static_cast<int>(q.size()));
   for (int attempt = 0; attempt < attempts && q.size() >= 2;) {
     cancel.ThrowIfStopped();
     double total = 0;
@@ -225,6 +238,73 @@ ShortcutResult ShortcutCertified(const MotionChecker& checker, const ShortcutReq
       edges = std::move(ne);
       ++out.accepted;
     }
+  }
+
+  // Corners cut (corners_only): each interior waypoint is replaced by two points on its edges, a
+  // fraction f of each edge away from it (f = 1/2, 1/4, ..., the largest proven free), joined by
+  // a straight motion. Near obstacles random pairs rarely land on both sides of one corner; this
+  // is where a path tightens around them. f <= 1/2 keeps the cuts of neighbouring corners apart,
+  // so every corner is tried at once.
+  if (request.corners_only && q.size() >= 3) {
+    cancel.ThrowIfStopped();
+    struct Cut {
+      Config a;
+      Config b;
+      EdgeReport report;
+      bool free = false;
+    };
+    std::vector<Cut> cuts(q.size());
+    ParallelFor(threads, q.size() - 2, [&](size_t k) {
+      const size_t j = k + 1;
+      if (cancel.stopped()) return;
+      for (double f = 0.5; f >= kMinCornerCut; f /= 2) {
+        Cut cut{.a = space.Interpolate(q[j], q[j - 1], f),
+                .b = space.Interpolate(q[j], q[j + 1], f)};
+        if (space.Distance(cut.a, cut.b) >=
+            f * (edges[j - 1].length + edges[j].length) * (1 - 1e-9)) {
+          return;  // a straight corner: nothing to gain
+        }
+        cut.report = Check(checker, cut.a, cut.b, request.safety);
+        cut.free = ProvenFree(cut.report, request.safety);
+        cuts[j] = std::move(cut);
+        if (cuts[j].free) return;
+      }
+    });
+    cancel.ThrowIfStopped();
+    std::vector<Config> nq{q.front()};
+    std::vector<int> ni{ids.front()};
+    std::vector<EdgeReport> ne;
+    // The stretch from the last point kept to `to` along edge j (a piece of an accepted motion).
+    const auto piece = [&](const EdgeReport& whole, const Config& from, const Config& to) {
+      return EdgeReport{.state = whole.state,
+                        .length = space.Distance(from, to),
+                        .certified = whole.certified && !whole.has_clearance};
+    };
+    for (size_t j = 1; j + 1 < q.size(); ++j) {
+      out.edges_checked += cuts[j].report.state == EdgeState::kUnchecked ? 0 : 1;
+      if (!cuts[j].free) {
+        ne.push_back(piece(edges[j - 1], nq.back(), q[j]));
+        nq.push_back(q[j]);
+        ni.push_back(ids[j]);
+        continue;
+      }
+      // Two cuts at the middle of one edge meet there: the point is kept once.
+      if (space.Distance(nq.back(), cuts[j].a) > 0) {
+        ne.push_back(piece(edges[j - 1], nq.back(), cuts[j].a));
+        nq.push_back(cuts[j].a);
+        ni.push_back(-1);
+      }
+      ne.push_back(std::move(cuts[j].report));
+      nq.push_back(cuts[j].b);
+      ni.push_back(-1);
+      ++out.accepted;
+    }
+    ne.push_back(piece(edges.back(), nq.back(), q.back()));
+    nq.push_back(q.back());
+    ni.push_back(ids.back());
+    q = std::move(nq);
+    ids = std::move(ni);
+    edges = std::move(ne);
   }
   return out;
 }

@@ -23,11 +23,14 @@ struct ShortcutRequest {
   // An id per waypoint that the result carries along (an H-Graph node); empty: none.
   std::vector<int> ids;
   uint64_t seed = 1;
-  // Random pairs of points tried per pass; 0: 10 per waypoint, at least 50.
+  // Random pairs of points tried per pass; 0: 5 per waypoint, at least 30.
   int attempts = 0;
   // > 0: a shortcut must also keep this clearance everywhere (safe length); its edges then
   // carry clearance profiles.
   double safety = 0;
+  // Only cut corners (see ShortcutCertified), no waypoint drops or random pairs: the final
+  // polish of a path that random shortcuts no longer improve.
+  bool corners_only = false;
   // Threads that check a batch of shortcuts at once (0 = all cores). The result does not depend
   // on it: the batches are fixed, only their checks run in parallel.
   int threads = 1;
@@ -49,11 +52,13 @@ struct ShortcutResult {
 };
 
 // Shortens the path: first drops waypoints whose neighbours connect, then tries seeded random
-// pairs of points. Keeps the endpoints; never lengthens the path. Both steps work in batches
-// whose checks run in parallel: the waypoints to drop are checked together and non-neighbouring
-// ones dropped, until none is left to try; the random pairs are drawn kShortcutBatch at a time
-// on the current path, and of those proven free the ones that gain most and share no edge of
-// the path are taken. Thread safe if the checker is. Throws Error(kCancelled /
+// pairs of points (or, with corners_only, cuts every corner: a waypoint is replaced by the
+// points a fraction f = 1/2, 1/4, ..., 1/16 of each of its edges away, the largest f whose
+// joining motion is proven free). Keeps the endpoints; never lengthens the path. Both steps work in
+// batches whose checks run in parallel: the waypoints to drop are checked together and
+// non-neighbouring ones dropped, until none is left to try; the random pairs are drawn
+// kShortcutBatch at a time on the current path, and of those proven free the ones that gain most
+// and share no edge of the path are taken. Thread safe if the checker is. Throws Error(kCancelled /
 // kDeadlineExceeded) when stopped.
 inline constexpr int kShortcutBatch = 8;
 

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <memory>
 #include <vector>
 
@@ -61,6 +62,38 @@ TEST_F(ShortcutTest, ShortensKeepsTheEndpointsAndEveryEdgeIsCertified) {
     // Kept input waypoints carry their id, points the shortcuts made carry -1.
     if (r.ids[j] >= 0) {
       EXPECT_TRUE(r.path.waypoints[j].isApprox(path_.waypoints[r.ids[j]]));
+    }
+  }
+  const PathCheckResult check = CheckPaths(planner_, PathCheckRequest{.paths = {r.path}});
+  ASSERT_EQ(check.paths.size(), 1u);
+  EXPECT_TRUE(check.paths[0].valid);
+  EXPECT_TRUE(check.paths[0].certified);
+}
+
+TEST_F(ShortcutTest, CornerCutsReplaceCornersByCertifiedMotions) {
+  ShortcutRequest request = Request();
+  request.corners_only = true;
+  // The input's own motions, certified: the pieces of them a cut leaves keep their verdict.
+  for (size_t j = 0; j + 1 < path_.waypoints.size(); ++j) {
+    request.edges.push_back(planner_.CheckEdge({.from = &path_.waypoints[j],
+                                                .to = &path_.waypoints[j + 1],
+                                                .mode = EdgeCheckMode::kCertified}));
+    ASSERT_EQ(request.edges.back().state, EdgeState::kValid);
+  }
+  const ShortcutResult r = ShortcutCertified(planner_, request);
+  const Space& space = planner_.space();
+  ASSERT_GT(r.accepted, 0);
+  EXPECT_LT(Length(space, r.path), Length(space, path_));
+  // Nothing else happens: every waypoint is kept (with its id) or cut.
+  const auto kept = std::count_if(r.ids.begin(), r.ids.end(), [](int id) { return id >= 0; });
+  EXPECT_EQ(kept + r.accepted, static_cast<long>(path_.waypoints.size()));
+  EXPECT_EQ(r.ids.front(), 0);
+  EXPECT_EQ(r.ids.back(), static_cast<int>(path_.waypoints.size()) - 1);
+  for (size_t j = 0; j < r.edges.size(); ++j) {
+    EXPECT_EQ(r.edges[j].state, EdgeState::kValid) << "edge " << j;
+    // The input repeats a waypoint (a zero-length edge it keeps); a cut makes none.
+    if (r.ids[j] < 0 || r.ids[j + 1] < 0) {
+      EXPECT_GT(r.edges[j].length, 0) << "edge " << j;
     }
   }
   const PathCheckResult check = CheckPaths(planner_, PathCheckRequest{.paths = {r.path}});
