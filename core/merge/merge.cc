@@ -260,7 +260,9 @@ void HybridizationSession::RefineClearanceEdges(const std::vector<int>& edge_ids
   std::vector<int> probe;
   std::vector<int> profile;
   for (int e : edge_ids) (probe_rounds_[e] >= rounds ? profile : probe).push_back(e);
-  // Edges are counted once, when profiled or found in contact.
+  // Edges are counted once, when profiled or found in contact. The profiles' grids first, in
+  // pieces over the threads: a batch holds few profiles among cheap probes.
+  ProbeProfileGrids(profile, cancel);
   CheckEdges(profile, EdgeNeed::kClearance, "check", progress, cancel, checked);
   std::atomic<int64_t> in_contact{0};
   ParallelFor(ResolveThreads(options_.threads), probe.size(), [&](size_t k) {
@@ -270,10 +272,15 @@ void HybridizationSession::RefineClearanceEdges(const std::vector<int>& edge_ids
     if (edge.report.state == EdgeState::kInvalid) return;
     std::vector<ClearanceSample>& known = probes_[e];
     std::vector<ClearanceSample> found;
+    // An unchecked candidate is often in contact, which a collision check finds for a fraction
+    // of a distance query; the probe points of one found valid are its checked samples.
+    const ProbeOrder probe_order = edge.report.state == EdgeState::kUnchecked
+                                       ? ProbeOrder::kCollisionFirst
+                                       : ProbeOrder::kDistanceOnly;
     // A round that finds no new point of the grid (a short edge) gives way to the next.
     while (found.empty() && probe_rounds_[e] < rounds) {
       found = checker_->ProbeClearance(graph_.node(edge.u).q, graph_.node(edge.v).q,
-                                       ProbeFractions()[probe_rounds_[e]], known);
+                                       ProbeFractions()[probe_rounds_[e]], known, probe_order);
       ++probe_rounds_[e];
     }
     AddProbes(e, found);
@@ -317,8 +324,9 @@ void HybridizationSession::ProbeProfileGrids(const std::vector<int>& edge_ids,
   ParallelFor(ResolveThreads(options_.threads), pieces.size(), [&](size_t k) {
     if (cancel.stopped()) return;
     const HEdge& edge = graph_.edge(pieces[k].edge);
-    found[k] = checker_->ProbeClearance(graph_.node(edge.u).q, graph_.node(edge.v).q,
-                                        pieces[k].fractions, probes_[pieces[k].edge]);
+    found[k] =
+        checker_->ProbeClearance(graph_.node(edge.u).q, graph_.node(edge.v).q, pieces[k].fractions,
+                                 probes_[pieces[k].edge], ProbeOrder::kDistanceOnly);
   });
   cancel.ThrowIfStopped();
   for (size_t k = 0; k < pieces.size(); ++k) AddProbes(pieces[k].edge, found[k]);

@@ -296,9 +296,10 @@ double LocalPlanner::MotionBound(const Config& a, const Config& b) const {
   return RobotMotionBound(space(), impl_->body_component, impl_->body_radius, a, b);
 }
 
-std::vector<ClearanceSample> LocalPlanner::ProbeClearance(
-    const Config& from, const Config& to, const std::vector<double>& fractions,
-    const std::vector<ClearanceSample>& known) const {
+std::vector<ClearanceSample> LocalPlanner::ProbeClearance(const Config& from, const Config& to,
+                                                          const std::vector<double>& fractions,
+                                                          const std::vector<ClearanceSample>& known,
+                                                          ProbeOrder order) const {
   const Space& s = space();
   HGRAPH_CHECK(from.size() == s.dimension() && to.size() == s.dimension());
   // The profile's grid (CheckEdge): t = k / segments, the configuration interpolated from `from`.
@@ -316,11 +317,24 @@ std::vector<ClearanceSample> LocalPlanner::ProbeClearance(
   CollisionContext& context = impl_->Context(*world_);
   std::vector<ClearanceSample> out;
   out.reserve(ks.size());
+  int64_t checks = 0;
+  int64_t queries = 0;
   for (int k : ks) {
     const double t = static_cast<double>(k) / segments;
-    out.push_back({.t = t, .clearance = context.Clearance(s.Interpolate(from, to, t))});
+    const Config q = s.Interpolate(from, to, t);
+    if (order == ProbeOrder::kCollisionFirst) {
+      ++checks;
+      if (!context.Valid(q)) {
+        out.push_back({.t = t, .clearance = 0});
+        break;
+      }
+    }
+    ++queries;
+    out.push_back({.t = t, .clearance = context.Clearance(q)});
+    if (order == ProbeOrder::kCollisionFirst && out.back().clearance <= 0) break;
   }
-  impl_->distance_queries += static_cast<int64_t>(out.size());
+  impl_->collision_checks += checks;
+  impl_->distance_queries += queries;
   return out;
 }
 

@@ -41,9 +41,10 @@ class LocalPlanner final : public MotionChecker {
   bool IsValid(const Config& q) const override;
   double Clearance(const Config& q) const override;
   double MotionBound(const Config& a, const Config& b) const override;
-  std::vector<ClearanceSample> ProbeClearance(
-      const Config& from, const Config& to, const std::vector<double>& fractions,
-      const std::vector<ClearanceSample>& known) const override;
+  std::vector<ClearanceSample> ProbeClearance(const Config& from, const Config& to,
+                                              const std::vector<double>& fractions,
+                                              const std::vector<ClearanceSample>& known,
+                                              ProbeOrder order) const override;
   int ProfileStretches(double length) const override { return SampleCount(length) - 1; }
   int64_t total_collision_checks() const override;
   int64_t total_distance_queries() const override;

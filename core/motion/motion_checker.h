@@ -81,6 +81,12 @@ inline bool RecordsClearance(EdgeCheckMode mode) {
   return mode == EdgeCheckMode::kClearance || mode == EdgeCheckMode::kClearanceOfValid;
 }
 
+// How ProbeClearance takes its samples: a distance query at each point, or first a collision
+// check (about a tenth of a distance query on meshes), which answers "in contact" (clearance 0)
+// on its own and ends the probe there: the motion is invalid, and its other points are not
+// needed. For a caller that expects contact often (lazy evaluation probing bridge candidates).
+enum class ProbeOrder { kDistanceOnly, kCollisionFirst };
+
 // Checks straight motions. Implementations must be thread safe: the H-Graph calls CheckEdge
 // from many worker threads at once. Not copyable (polymorphic base).
 class MotionChecker {
@@ -108,14 +114,17 @@ class MotionChecker {
   // whose t is in `known`, each once, sorted by t. They are the very samples the profile would
   // record there, so that a bound built on them holds for the profile. Lazy evaluation tightens
   // an edge's bound with them before it pays for the whole profile. Empty when the checker
-  // cannot say (the default) or no such point is left. Counts a distance query per sample.
-  virtual std::vector<ClearanceSample> ProbeClearance(
-      const Config& from, const Config& to, const std::vector<double>& fractions,
-      const std::vector<ClearanceSample>& known) const {
+  // cannot say (the default) or no such point is left. Counts a distance query per sample, and
+  // with kCollisionFirst a collision check per sample.
+  virtual std::vector<ClearanceSample> ProbeClearance(const Config& from, const Config& to,
+                                                      const std::vector<double>& fractions,
+                                                      const std::vector<ClearanceSample>& known,
+                                                      ProbeOrder order) const {
     (void)from;
     (void)to;
     (void)fractions;
     (void)known;
+    (void)order;
     return {};
   }
   // The number of stretches a clearance profile of a motion of this length samples (its grid

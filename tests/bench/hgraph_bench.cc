@@ -49,10 +49,11 @@ class CountingChecker final : public MotionChecker {
   double MotionBound(const Config& a, const Config& b) const override {
     return inner_.MotionBound(a, b);
   }
-  std::vector<ClearanceSample> ProbeClearance(
-      const Config& from, const Config& to, const std::vector<double>& fractions,
-      const std::vector<ClearanceSample>& known) const override {
-    return inner_.ProbeClearance(from, to, fractions, known);
+  std::vector<ClearanceSample> ProbeClearance(const Config& from, const Config& to,
+                                              const std::vector<double>& fractions,
+                                              const std::vector<ClearanceSample>& known,
+                                              ProbeOrder order) const override {
+    return inner_.ProbeClearance(from, to, fractions, known, order);
   }
   int ProfileStretches(double length) const override { return inner_.ProfileStretches(length); }
   int64_t total_collision_checks() const override { return inner_.total_collision_checks(); }

@@ -315,7 +315,7 @@ TEST(LocalPlannerTest, ProbesAreProfileSamplesAndTightenTheBounds) {
          {std::vector<double>{0.5}, {0.25, 0.75}, {0.125, 0.375, 0.625, 0.875}}) {
       const int64_t before = planner.total_distance_queries();
       const std::vector<ClearanceSample> found =
-          planner.ProbeClearance(from, to, fractions, probes);
+          planner.ProbeClearance(from, to, fractions, probes, ProbeOrder::kDistanceOnly);
       EXPECT_EQ(planner.total_distance_queries() - before, static_cast<int64_t>(found.size()));
       for (const ClearanceSample& sample : found) {
         const auto in_profile =
@@ -331,7 +331,8 @@ TEST(LocalPlannerTest, ProbesAreProfileSamplesAndTightenTheBounds) {
                 [](const ClearanceSample& a, const ClearanceSample& b) { return a.t < b.t; });
       // Nothing twice: the same points asked for again are not probed again.
       const int64_t again = planner.total_distance_queries();
-      EXPECT_TRUE(planner.ProbeClearance(from, to, fractions, probes).empty());
+      EXPECT_TRUE(
+          planner.ProbeClearance(from, to, fractions, probes, ProbeOrder::kDistanceOnly).empty());
       EXPECT_EQ(planner.total_distance_queries(), again);
       input.interior = &probes;
       const double bound = inverse->EdgeBound(input);
@@ -344,6 +345,55 @@ TEST(LocalPlannerTest, ProbesAreProfileSamplesAndTightenTheBounds) {
   }
   EXPECT_GE(compared, 30);
   EXPECT_GT(tightened, compared / 2);
+}
+
+// Collision first: the same samples up to the first point in contact, which it reports with
+// clearance 0 for a collision check instead of a distance query, and nothing after it.
+TEST(LocalPlannerTest, CollisionFirstProbesStopAtContactForLessDistanceQueries) {
+  const auto world = CircleWorld();
+  const LocalPlanner planner(world, {.resolution = 0.01});
+  const Space& space = world->space();
+  const std::vector<double> fractions = {0.125, 0.25, 0.375, 0.5, 0.625, 0.75, 0.875};
+  std::mt19937_64 rng(13);
+  int in_contact = 0, free = 0;
+  int64_t saved = 0;
+  for (int i = 0; i < 200; ++i) {
+    const Config from = space.Sample(rng);
+    const Config to = space.Sample(rng);
+    const int64_t queries = planner.total_distance_queries();
+    const int64_t checks = planner.total_collision_checks();
+    const std::vector<ClearanceSample> plain =
+        planner.ProbeClearance(from, to, fractions, {}, ProbeOrder::kDistanceOnly);
+    const int64_t plain_queries = planner.total_distance_queries() - queries;
+    EXPECT_EQ(planner.total_collision_checks(), checks);
+    const int64_t queries_first = planner.total_distance_queries();
+    const int64_t checks_first = planner.total_collision_checks();
+    const std::vector<ClearanceSample> first =
+        planner.ProbeClearance(from, to, fractions, {}, ProbeOrder::kCollisionFirst);
+    const int64_t first_queries = planner.total_distance_queries() - queries_first;
+    EXPECT_EQ(planner.total_collision_checks() - checks_first, static_cast<int64_t>(first.size()));
+    const auto contact = std::find_if(plain.begin(), plain.end(),
+                                      [](const ClearanceSample& p) { return p.clearance <= 0; });
+    if (contact == plain.end()) {
+      ++free;
+      ASSERT_EQ(first.size(), plain.size()) << "edge " << i;
+      EXPECT_EQ(first_queries, plain_queries);
+    } else {
+      ++in_contact;
+      ASSERT_EQ(first.size(), static_cast<size_t>(contact - plain.begin()) + 1) << "edge " << i;
+      EXPECT_EQ(first.back().t, contact->t);
+      EXPECT_EQ(first.back().clearance, 0);
+      EXPECT_LT(first_queries, plain_queries);
+      saved += plain_queries - first_queries;
+    }
+    for (size_t j = 0; j + 1 < first.size(); ++j) {
+      EXPECT_EQ(first[j].t, plain[j].t);
+      EXPECT_EQ(first[j].clearance, plain[j].clearance);
+    }
+  }
+  EXPECT_GT(in_contact, 20);
+  EXPECT_GT(free, 5);
+  EXPECT_GT(saved, in_contact);
 }
 
 // A profile that is handed clearances known on its grid (the probes, an end's) records the same
@@ -363,7 +413,8 @@ TEST(LocalPlannerTest, ProfileWithKnownGridClearancesEqualsTheFullProfile) {
     ASSERT_EQ(stretches + 1, planner.SampleCount(full.length));
     std::vector<double> fractions;
     for (int k = 1; k < stretches; ++k) fractions.push_back(static_cast<double>(k) / stretches);
-    std::vector<ClearanceSample> known = planner.ProbeClearance(from, to, fractions, {});
+    std::vector<ClearanceSample> known =
+        planner.ProbeClearance(from, to, fractions, {}, ProbeOrder::kDistanceOnly);
     ASSERT_EQ(static_cast<int>(known.size()), std::max(0, stretches - 1));
     known.insert(known.begin(), {0.0, planner.Clearance(from)});
     const EdgeReport reused = planner.CheckEdge(
