@@ -42,6 +42,14 @@ class ShortcutTest : public ::testing::Test {
     return length;
   }
 
+  // The path passes the certified check, as `hgraph check` runs it.
+  void ExpectCertified(const InputPath& path) const {
+    const PathCheckResult check = CheckPaths(planner_, PathCheckRequest{.paths = {path}});
+    ASSERT_EQ(check.paths.size(), 1u);
+    EXPECT_TRUE(check.paths[0].valid);
+    EXPECT_TRUE(check.paths[0].certified);
+  }
+
   LocalPlanner planner_;
   InputPath path_;
 };
@@ -64,10 +72,7 @@ TEST_F(ShortcutTest, ShortensKeepsTheEndpointsAndEveryEdgeIsCertified) {
       EXPECT_TRUE(r.path.waypoints[j].isApprox(path_.waypoints[r.ids[j]]));
     }
   }
-  const PathCheckResult check = CheckPaths(planner_, PathCheckRequest{.paths = {r.path}});
-  ASSERT_EQ(check.paths.size(), 1u);
-  EXPECT_TRUE(check.paths[0].valid);
-  EXPECT_TRUE(check.paths[0].certified);
+  ExpectCertified(r.path);
 }
 
 TEST_F(ShortcutTest, CornerCutsReplaceCornersByCertifiedMotions) {
@@ -96,10 +101,7 @@ TEST_F(ShortcutTest, CornerCutsReplaceCornersByCertifiedMotions) {
       EXPECT_GT(r.edges[j].length, 0) << "edge " << j;
     }
   }
-  const PathCheckResult check = CheckPaths(planner_, PathCheckRequest{.paths = {r.path}});
-  ASSERT_EQ(check.paths.size(), 1u);
-  EXPECT_TRUE(check.paths[0].valid);
-  EXPECT_TRUE(check.paths[0].certified);
+  ExpectCertified(r.path);
 }
 
 TEST_F(ShortcutTest, TheThreadCountDoesNotChangeTheResult) {
