@@ -252,45 +252,53 @@ ShortcutResult ShortcutCertified(const MotionChecker& checker, const ShortcutReq
       Config b;
       EdgeReport report;
       bool free = false;
+      int checks = 0;
     };
     std::vector<Cut> cuts(q.size());
     ParallelFor(threads, q.size() - 2, [&](size_t k) {
       const size_t j = k + 1;
       if (cancel.stopped()) return;
       for (double f = 0.5; f >= kMinCornerCut; f /= 2) {
-        Cut cut{.a = space.Interpolate(q[j], q[j - 1], f),
-                .b = space.Interpolate(q[j], q[j + 1], f)};
+        Cut& cut = cuts[j];
+        cut.a = space.Interpolate(q[j], q[j - 1], f);
+        cut.b = space.Interpolate(q[j], q[j + 1], f);
         if (space.Distance(cut.a, cut.b) >=
             f * (edges[j - 1].length + edges[j].length) * (1 - 1e-9)) {
           return;  // a straight corner: nothing to gain
         }
         cut.report = Check(checker, cut.a, cut.b, request.safety);
+        ++cut.checks;
         cut.free = ProvenFree(cut.report, request.safety);
-        cuts[j] = std::move(cut);
-        if (cuts[j].free) return;
+        if (cut.free) return;
       }
     });
     cancel.ThrowIfStopped();
     std::vector<Config> nq{q.front()};
     std::vector<int> ni{ids.front()};
     std::vector<EdgeReport> ne;
-    // The stretch from the last point kept to `to` along edge j (a piece of an accepted motion).
-    const auto piece = [&](const EdgeReport& whole, const Config& from, const Config& to) {
-      return EdgeReport{.state = whole.state,
-                        .length = space.Distance(from, to),
-                        .certified = whole.certified && !whole.has_clearance};
+    // Edge j - 1 of the path, from the previous corner's cut (if any) to this one's (if any): the
+    // edge itself, or a piece of it that keeps its verdict.
+    const auto add_edge = [&](size_t j, const Config& to) {
+      if (!cuts[j - 1].free && !cuts[j].free) {
+        ne.push_back(edges[j - 1]);
+        return;
+      }
+      const EdgeReport& report = edges[j - 1];
+      ne.push_back(EdgeReport{.state = report.state,
+                              .length = space.Distance(nq.back(), to),
+                              .certified = report.certified && !report.has_clearance});
     };
     for (size_t j = 1; j + 1 < q.size(); ++j) {
-      out.edges_checked += cuts[j].report.state == EdgeState::kUnchecked ? 0 : 1;
+      out.edges_checked += cuts[j].checks;
       if (!cuts[j].free) {
-        ne.push_back(piece(edges[j - 1], nq.back(), q[j]));
+        add_edge(j, q[j]);
         nq.push_back(q[j]);
         ni.push_back(ids[j]);
         continue;
       }
       // Two cuts at the middle of one edge meet there: the point is kept once.
       if (space.Distance(nq.back(), cuts[j].a) > 0) {
-        ne.push_back(piece(edges[j - 1], nq.back(), cuts[j].a));
+        add_edge(j, cuts[j].a);
         nq.push_back(cuts[j].a);
         ni.push_back(-1);
       }
@@ -299,7 +307,7 @@ ShortcutResult ShortcutCertified(const MotionChecker& checker, const ShortcutReq
       ni.push_back(-1);
       ++out.accepted;
     }
-    ne.push_back(piece(edges.back(), nq.back(), q.back()));
+    add_edge(q.size() - 1, q.back());
     nq.push_back(q.back());
     ni.push_back(ids.back());
     q = std::move(nq);
