@@ -33,8 +33,14 @@ bool ProvenFree(const EdgeReport& report, double safety) {
 // geometric mean of the ratios to the best OMPL pipeline, 0.942 against 0.946).
 constexpr int kAttemptsPerWaypoint = 5;
 constexpr int kMinAttempts = 30;
-// The smallest fraction of an edge a corner cut tries.
+// The smallest fraction of an edge a corner cut tries, and the least a cut must be able to gain,
+// as a fraction of the path's length, to be checked at all (a cut f of the way gains about f
+// times the f = 1 cut, so flat corners and small fractions are skipped). On the 14 kept
+// benchmark problems 1e-4 took the polish's cost from 524k to 433k (collision checks + 10 x
+// distance queries) for a geometric mean of the length ratios to OMPL of 0.9429 against 0.9423;
+// 3e-4: 406k, 0.9439; 1e-3: 387k, 0.9468.
 constexpr double kMinCornerCut = 1.0 / 16;
+constexpr double kMinCornerGain = 1e-4;
 
 // A random shortcut of a batch: from a (fraction t0 of edge e0) to b (t1 of edge e1), what it
 // gains, and the check of its motion.
@@ -255,6 +261,9 @@ ShortcutResult ShortcutCertified(const MotionChecker& checker, const ShortcutReq
       int checks = 0;
     };
     std::vector<Cut> cuts(q.size());
+    double total = 0;
+    for (const EdgeReport& e : edges) total += e.length;
+    const double least_gain = kMinCornerGain * total;
     ParallelFor(threads, q.size() - 2, [&](size_t k) {
       const size_t j = k + 1;
       if (cancel.stopped()) return;
@@ -263,8 +272,8 @@ ShortcutResult ShortcutCertified(const MotionChecker& checker, const ShortcutReq
         cut.a = space.Interpolate(q[j], q[j - 1], f);
         cut.b = space.Interpolate(q[j], q[j + 1], f);
         if (space.Distance(cut.a, cut.b) >=
-            f * (edges[j - 1].length + edges[j].length) * (1 - 1e-9)) {
-          return;  // a straight corner: nothing to gain
+            f * (edges[j - 1].length + edges[j].length) * (1 - 1e-9) - least_gain) {
+          return;  // a straight corner, or a cut too small to matter
         }
         cut.report = Check(checker, cut.a, cut.b, request.safety);
         ++cut.checks;
