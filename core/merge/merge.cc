@@ -566,15 +566,17 @@ SearchResult HybridizationSession::Optimize(const Measure& measure, SearchResult
     const ShortcutResult shortcut = ShortcutCertified(*checker_, request, cancel);
     *rechecked += shortcut.edges_checked;
     ++result->stats.optimize_rounds;
-    // Motions it checked between two nodes join the H-Graph, so that no later round or search
-    // checks them again.
-    for (const auto& [a, b, report] : shortcut.id_checks) {
-      if (a == b) continue;
+    // A motion checked between two nodes joins the H-Graph with its report (an edge it already
+    // holds keeps its own report unless unchecked), so that no later round or search checks it
+    // again.
+    const auto keep = [&](int a, int b, const EdgeReport& report) {
+      if (a == b) return;
       const int e = graph_.AddEdge(a, b, false);
       if (graph_.edge(e).report.state == EdgeState::kUnchecked) {
         graph_.mutable_edge(e).report = report;
       }
-    }
+    };
+    for (const auto& [a, b, report] : shortcut.id_checks) keep(a, b, report);
     // A round that does not gain ends the random rounds (the polish starts) or the polish.
     if (shortcut.accepted == 0) {
       if (!start_polish()) break;
@@ -591,13 +593,7 @@ SearchResult HybridizationSession::Optimize(const Measure& measure, SearchResult
       ids[j] = graph_.AddNode(shortcut.path.waypoints[j]);
       fresh.push_back(ids[j]);
     }
-    for (size_t j = 0; j + 1 < ids.size(); ++j) {
-      if (ids[j] == ids[j + 1]) continue;
-      const int e = graph_.AddEdge(ids[j], ids[j + 1], false);
-      if (graph_.edge(e).report.state == EdgeState::kUnchecked) {
-        graph_.mutable_edge(e).report = shortcut.edges[j];
-      }
-    }
+    for (size_t j = 0; j + 1 < ids.size(); ++j) keep(ids[j], ids[j + 1], shortcut.edges[j]);
     SearchResult next;
     if (polishing) {
       // The polished path itself: every edge proven free (the cuts) or a piece of one.

@@ -26,6 +26,22 @@ bool ProvenFree(const EdgeReport& report, double safety) {
          (safety <= 0 || (report.has_clearance && MinClearance(report) >= safety));
 }
 
+// The stretch of an accepted motion (`whole`) from `from` to `to`: it keeps the motion's verdict
+// (a merge profiles its output's edges at the end, which would find anything a sampled check
+// missed); a certificate holds for every stretch of the motion, a profile does not map onto one.
+EdgeReport Piece(const Space& space, const EdgeReport& whole, const Config& from,
+                 const Config& to) {
+  return EdgeReport{.state = whole.state,
+                    .length = space.Distance(from, to),
+                    .certified = whole.certified && !whole.has_clearance};
+}
+
+double PathLength(const std::vector<EdgeReport>& edges) {
+  double total = 0;
+  for (const EdgeReport& e : edges) total += e.length;
+  return total;
+}
+
 // Random pairs tried per pass by default: this many per waypoint, at least kMinAttempts. With
 // the merge's rounds (each re-hybridized, then a polish of corner cuts), 5 and 30 did as well as
 // 10 and 50 for 11% less work on the 14 kept benchmark problems (hgraph-bench seeds 1 and 2:
@@ -150,8 +166,7 @@ ShortcutResult ShortcutCertified(const MotionChecker& checker, const ShortcutReq
           : std::max(kMinAttempts, kAttemptsPerWaypoint * static_cast<int>(q.size()));
   for (int attempt = 0; attempt < attempts && q.size() >= 2;) {
     cancel.ThrowIfStopped();
-    double total = 0;
-    for (const EdgeReport& e : edges) total += e.length;
+    const double total = PathLength(edges);
     if (total <= 0) break;
     std::uniform_real_distribution<double> position(0.0, total);
     // Edge index and fraction of a position along the path.
@@ -211,16 +226,9 @@ ShortcutResult ShortcutCertified(const MotionChecker& checker, const ShortcutReq
               [&](size_t x, size_t y) { return batch[x].e0 > batch[y].e0; });
     for (size_t k : taken) {
       Candidate& c = batch[k];
-      // The pieces of the cut edges up to a and from b are parts of motions already accepted:
-      // they keep their edge's verdict (a merge profiles its output's edges at the end, which
-      // would find anything a sampled check missed).
-      const auto piece = [&](const EdgeReport& whole, const Config& from, const Config& to) {
-        return EdgeReport{.state = whole.state,
-                          .length = space.Distance(from, to),
-                          .certified = whole.certified && !whole.has_clearance};
-      };
-      EdgeReport head = piece(edges[c.e0], q[c.e0], c.a);
-      EdgeReport tail = piece(edges[c.e1], c.b, q[c.e1 + 1]);
+      // The cut edges' pieces up to a and from b.
+      EdgeReport head = Piece(space, edges[c.e0], q[c.e0], c.a);
+      EdgeReport tail = Piece(space, edges[c.e1], c.b, q[c.e1 + 1]);
       std::vector<Config> nq(q.begin(), q.begin() + static_cast<std::ptrdiff_t>(c.e0 + 1));
       std::vector<int> ni(ids.begin(), ids.begin() + static_cast<std::ptrdiff_t>(c.e0 + 1));
       std::vector<EdgeReport> ne(edges.begin(), edges.begin() + static_cast<std::ptrdiff_t>(c.e0));
@@ -261,9 +269,7 @@ ShortcutResult ShortcutCertified(const MotionChecker& checker, const ShortcutReq
       int checks = 0;
     };
     std::vector<Cut> cuts(q.size());
-    double total = 0;
-    for (const EdgeReport& e : edges) total += e.length;
-    const double least_gain = kMinCornerGain * total;
+    const double least_gain = kMinCornerGain * PathLength(edges);
     ParallelFor(threads, q.size() - 2, [&](size_t k) {
       const size_t j = k + 1;
       if (cancel.stopped()) return;
@@ -286,16 +292,10 @@ ShortcutResult ShortcutCertified(const MotionChecker& checker, const ShortcutReq
     std::vector<int> ni{ids.front()};
     std::vector<EdgeReport> ne;
     // Edge j - 1 of the path, from the previous corner's cut (if any) to this one's (if any): the
-    // edge itself, or a piece of it that keeps its verdict.
+    // edge itself, or a piece of it.
     const auto add_edge = [&](size_t j, const Config& to) {
-      if (!cuts[j - 1].free && !cuts[j].free) {
-        ne.push_back(edges[j - 1]);
-        return;
-      }
-      const EdgeReport& report = edges[j - 1];
-      ne.push_back(EdgeReport{.state = report.state,
-                              .length = space.Distance(nq.back(), to),
-                              .certified = report.certified && !report.has_clearance});
+      const bool whole = !cuts[j - 1].free && !cuts[j].free;
+      ne.push_back(whole ? edges[j - 1] : Piece(space, edges[j - 1], nq.back(), to));
     };
     for (size_t j = 1; j + 1 < q.size(); ++j) {
       out.edges_checked += cuts[j].checks;

@@ -16,6 +16,11 @@
 
 namespace hgraph {
 
+// Random pairs drawn and checked together (ShortcutCertified): enough to keep the threads busy,
+// few enough that little is checked on a path about to change. Fixed, so that the result does
+// not depend on the thread count.
+inline constexpr int kShortcutBatch = 8;
+
 struct ShortcutRequest {
   InputPath path;
   // The reports of the path's edges when they are known (certified), else empty.
@@ -52,16 +57,13 @@ struct ShortcutResult {
 };
 
 // Shortens the path: first drops waypoints whose neighbours connect, then tries seeded random
-// pairs of points (or, with corners_only, cuts every corner: a waypoint is replaced by the
-// points a fraction f = 1/2, 1/4, ..., 1/16 of each of its edges away, the largest f whose
-// joining motion is proven free). Keeps the endpoints; never lengthens the path. Both steps work in
-// batches whose checks run in parallel: the waypoints to drop are checked together and
-// non-neighbouring ones dropped, until none is left to try; the random pairs are drawn
-// kShortcutBatch at a time on the current path, and of those proven free the ones that gain most
-// and share no edge of the path are taken. Thread safe if the checker is. Throws Error(kCancelled /
-// kDeadlineExceeded) when stopped.
-inline constexpr int kShortcutBatch = 8;
-
+// pairs of points (or, with corners_only, cuts every corner: a waypoint is replaced by the points
+// a fraction f = 1/2, 1/4, ..., 1/16 of each of its edges away, the largest f whose joining motion
+// is proven free). Keeps the endpoints; never lengthens the path. The checks run in parallel
+// batches: the waypoints to drop are checked together and non-neighbouring ones dropped, until
+// none is left to try; the random pairs are drawn kShortcutBatch at a time on the current path,
+// and of those proven free the ones that gain most and share no edge of the path are taken.
+// Thread safe if the checker is. Throws Error(kCancelled / kDeadlineExceeded) when stopped.
 ShortcutResult ShortcutCertified(const MotionChecker& checker, const ShortcutRequest& request,
                                  const CancelToken& cancel = {});
 
