@@ -132,6 +132,32 @@ double MinKnownClearance(const EdgeBoundInput& edge) {
   return c;
 }
 
+}  // namespace
+
+double ClearanceFloor(const EdgeBoundInput& edge) {
+  if (!std::isfinite(edge.clearance_from) || !std::isfinite(edge.clearance_to) ||
+      !std::isfinite(edge.motion_bound)) {
+    return -kInf;
+  }
+  // The slack of the certified local planner's steps (core/motion/local_planner.cc), for rounding.
+  const double d = edge.motion_bound / 0.999;
+  double floor = std::min(edge.clearance_from, edge.clearance_to);
+  double t0 = 0;
+  double c0 = edge.clearance_from;
+  const auto piece = [&](double t1, double c1) {
+    floor = std::min({floor, c1, 0.5 * (c0 + c1 - d * (t1 - t0))});
+    t0 = t1;
+    c0 = c1;
+  };
+  if (edge.interior != nullptr) {
+    for (const ClearanceSample& sample : *edge.interior) piece(sample.t, sample.clearance);
+  }
+  piece(1.0, edge.clearance_to);
+  return floor;
+}
+
+namespace {
+
 class LengthMeasure final : public Measure {
  public:
   explicit LengthMeasure(const MeasureSpec& spec) : Measure(spec) {}
@@ -208,6 +234,11 @@ class BottleneckMeasure final : public Measure {
   // The profile starts and ends at the edge's end configurations and holds the probed points, so
   // its minimum is at most theirs.
   double EdgeBound(const EdgeBoundInput& edge) const override { return MinKnownClearance(edge); }
+  // Every sample of the profile lies above the clearance floor.
+  double EdgeFloor(const EdgeBoundInput& edge) const override {
+    const double floor = ClearanceFloor(edge);
+    return floor > 0 ? floor : std::numeric_limits<double>::quiet_NaN();
+  }
   double Objective(const PathQuality& quality) const override { return -quality.min_clearance; }
 };
 
@@ -227,6 +258,14 @@ class SafeLengthMeasure final : public Measure {
       return kInf;
     }
     return edge.length;
+  }
+  // An edge whose clearance floor reaches C is usable at its length.
+  double EdgeFloor(const EdgeBoundInput& edge) const override {
+    if (spec().safety > 0 && ClearanceFloor(edge) >= spec().safety) return edge.length;
+    return std::numeric_limits<double>::quiet_NaN();
+  }
+  double clearance_target() const override {
+    return spec().safety > 0 ? spec().safety : std::numeric_limits<double>::quiet_NaN();
   }
   double cost_per_distance() const override { return 1; }
   double Objective(const PathQuality& quality) const override {

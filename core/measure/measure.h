@@ -111,6 +111,17 @@ class Measure {
   // Before the check: a lower bound on the cost (kSum) or an upper bound on the width
   // (kBottleneck) that EdgeValue can return for this edge if it turns out valid.
   virtual double EdgeBound(const EdgeBoundInput& edge) const = 0;
+  // Before the check: what the known clearances prove of the edge at worst, or NaN if they
+  // prove nothing. kSum: an upper bound on its cost; kBottleneck: a lower bound on its width,
+  // positive only when it proves the motion free. An edge whose floor reaches what the search
+  // needs of it is settled without a profile (see core/search/search.h).
+  virtual double EdgeFloor(const EdgeBoundInput& edge) const {
+    (void)edge;
+    return std::numeric_limits<double>::quiet_NaN();
+  }
+  // A clearance that decides an edge's value under this measure, so that an edge proven to keep
+  // it (or proven not to) needs no profile: safe length's C. NaN when the value needs the profile.
+  virtual double clearance_target() const { return std::numeric_limits<double>::quiet_NaN(); }
   // Cost-to-go lower bound per unit of configuration distance, for A* (kSum; 0 = none).
   virtual double cost_per_distance() const { return 0; }
   // The value the measure optimises, smaller is better: length, inverse clearance, -min
@@ -125,6 +136,12 @@ class Measure {
  private:
   MeasureSpec spec_;
 };
+
+// A lower bound on the clearance all along an unchecked edge (and so on every sample its profile
+// would record): clearance changes no faster than robot points move, so between two known
+// samples (c0 at t0, c1 at t1) it is at least (c0 + c1 - D (t1 - t0)) / 2, D the motion bound.
+// -infinity when an end's clearance or the motion bound is unknown.
+double ClearanceFloor(const EdgeBoundInput& edge);
 
 // Cost of a valid edge under an additive measure (length, inverse clearance, safe length; for
 // safe length, infinity when the edge's clearance is below `safety`).

@@ -254,12 +254,38 @@ void HybridizationSession::CheckEdges(const std::vector<int>& edge_ids, EdgeNeed
 }
 
 void HybridizationSession::RefineClearanceEdges(const std::vector<int>& edge_ids,
+                                                const std::vector<double>& targets,
                                                 const ProgressCallback& progress,
                                                 const CancelToken& cancel, int64_t* checked) {
   const int rounds = static_cast<int>(ProbeFractions().size());
   std::vector<int> probe;
   std::vector<int> profile;
-  for (int e : edge_ids) (probe_rounds_[e] >= rounds ? profile : probe).push_back(e);
+  std::vector<std::pair<int, double>> prove;
+  for (size_t k = 0; k < edge_ids.size(); ++k) {
+    const int e = edge_ids[k];
+    if (targets[k] > 0) {
+      prove.emplace_back(e, targets[k]);
+    } else {
+      (probe_rounds_[e] >= rounds ? profile : probe).push_back(e);
+    }
+  }
+  // Edges a target decides: proven to keep it, or shown not to, or else profiled.
+  std::vector<char> undecided(prove.size(), 0);
+  std::atomic<int64_t> decided{0};
+  ParallelFor(ResolveThreads(options_.threads), prove.size(), [&](size_t k) {
+    if (cancel.stopped()) return;
+    const auto [e, target] = prove[k];
+    if (ProveClearance(e, target)) {
+      decided.fetch_add(1, std::memory_order_relaxed);
+    } else {
+      undecided[k] = 1;
+    }
+  });
+  cancel.ThrowIfStopped();
+  *checked += decided.load();
+  for (size_t k = 0; k < prove.size(); ++k) {
+    if (undecided[k]) profile.push_back(prove[k].first);
+  }
   // Edges are counted once, when profiled or found in contact. The profiles' grids first, in
   // pieces over the threads: a batch holds few profiles among cheap probes.
   ProbeProfileGrids(profile, cancel);
@@ -297,6 +323,70 @@ void HybridizationSession::RefineClearanceEdges(const std::vector<int>& edge_ids
   });
   cancel.ThrowIfStopped();
   *checked += in_contact.load();
+}
+
+bool HybridizationSession::ProveClearance(int e, double target) {
+  HEdge& edge = graph_.mutable_edge(e);
+  if (edge.report.state == EdgeState::kInvalid) return true;
+  const int stretches = checker_->ProfileStretches(edge_length_[e]);
+  const double from = node_clearance_[edge.u];
+  const double to = node_clearance_[edge.v];
+  if (stretches < 1 || std::isnan(from) || std::isnan(to)) return false;
+  if (std::isnan(motion_bound_[e])) {
+    motion_bound_[e] = checker_->MotionBound(graph_.node(edge.u).q, graph_.node(edge.v).q);
+  }
+  // As ClearanceFloor (core/measure/measure.h), which decides with the same samples.
+  const double d = motion_bound_[e] / 0.999;
+  if (!std::isfinite(d)) return false;
+  // A motion checked valid has no contact on its grid; an unchecked one often has.
+  const ProbeOrder order = edge.report.state == EdgeState::kUnchecked ? ProbeOrder::kCollisionFirst
+                                                                      : ProbeOrder::kDistanceOnly;
+  std::vector<ClearanceSample>& known = probes_[e];
+  double narrowest = std::min(from, to);
+  for (const ClearanceSample& sample : known) narrowest = std::min(narrowest, sample.clearance);
+  if (narrowest < target) return true;
+  // A target the narrowest known sample meets exactly asks for the exact width: the profile.
+  if (narrowest == target) return false;
+  for (;;) {
+    // The samples in order, ends included; the first stretch between two that their
+    // clearances do not prove above the target.
+    ClearanceSample a{.t = 0, .clearance = from};
+    if (a.clearance < target) return true;
+    bool covered = true;
+    ClearanceSample gap_from;
+    ClearanceSample gap_to;
+    for (size_t i = 0; i <= known.size(); ++i) {
+      const ClearanceSample b = i < known.size() ? known[i] : ClearanceSample{1.0, to};
+      if (b.clearance < target) return true;  // the motion is narrower: decided
+      if (covered && 0.5 * (a.clearance + b.clearance - d * (b.t - a.t)) < target) {
+        covered = false;
+        gap_from = a;
+        gap_to = b;
+      }
+      a = b;
+    }
+    if (covered) return true;
+    // A sample at the middle of the stretch neither end proves, on the grid.
+    const double reach_from = (gap_from.clearance - target) / d;
+    const double reach_to = (gap_to.clearance - target) / d;
+    const double middle = 0.5 * (gap_from.t + reach_from + gap_to.t - reach_to);
+    const long lo = std::lround(gap_from.t * stretches) + 1;
+    const long hi = std::lround(gap_to.t * stretches) - 1;
+    if (lo > hi) return false;  // no grid point between: only the profile decides
+    const long k = std::clamp(std::lround(middle * stretches), lo, hi);
+    const std::vector<ClearanceSample> found =
+        checker_->ProbeClearance(graph_.node(edge.u).q, graph_.node(edge.v).q,
+                                 {static_cast<double>(k) / stretches}, known, order);
+    if (found.empty()) return false;
+    AddProbes(e, found);
+    if (found.front().clearance <= 0) {
+      edge.report = EdgeReport{.state = EdgeState::kInvalid,
+                               .length = edge_length_[e],
+                               .invalid_at = found.front().t,
+                               .distance_queries = static_cast<int64_t>(known.size())};
+      return true;
+    }
+  }
 }
 
 void HybridizationSession::ProbeProfileGrids(const std::vector<int>& edge_ids,
@@ -448,13 +538,31 @@ SearchResult HybridizationSession::SearchBest(const Measure& measure, EdgeNeed f
     return !report.usable() ||
            (report.state == EdgeState::kValid && (!needs_clearance || report.has_clearance));
   };
-  const SearchEdgeFn see = [&](int e) {
+  const auto look = [&](int e) {
     const EdgeReport& report = graph_.edge(e).report;
     if (!report.usable()) {
       return SearchEdge{.value = nan, .length = edge_length_[e]};
     }
-    if (exact(e)) return SearchEdge{.value = measure.EdgeValue(report), .length = edge_length_[e]};
-    return SearchEdge{.value = measure.EdgeBound(BoundInput(e)), .length = edge_length_[e]};
+    if (exact(e)) {
+      const double value = measure.EdgeValue(report);
+      return SearchEdge{.value = value, .length = edge_length_[e], .floor = value, .checked = true};
+    }
+    const EdgeBoundInput input = BoundInput(e);
+    return SearchEdge{.value = measure.EdgeBound(input),
+                      .length = edge_length_[e],
+                      .floor = measure.EdgeFloor(input),
+                      .checked = report.state == EdgeState::kValid};
+  };
+  // What the search saw of each edge, until a check changes what is known of it: a search
+  // looks at an edge once per node it settles next to it, and a bound scans the edge's probes.
+  std::vector<SearchEdge> seen(graph_.num_edges());
+  std::vector<char> seen_now(graph_.num_edges(), 0);
+  const SearchEdgeFn see = [&](int e) {
+    if (!seen_now[e]) {
+      seen[e] = look(e);
+      seen_now[e] = 1;
+    }
+    return seen[e];
   };
   std::vector<double> cost_to_go;
   if (measure.cost_per_distance() > 0) {
@@ -473,18 +581,20 @@ SearchResult HybridizationSession::SearchBest(const Measure& measure, EdgeNeed f
     Clock::time_point phase = Clock::now();
     double checking_ms = 0;
     LazySearchStats lazy;
-    const EvaluateFn evaluate = [&](const std::vector<int>& edges) {
+    const EvaluateFn evaluate = [&](const std::vector<int>& edges,
+                                    const std::vector<double>& targets) {
       const Clock::time_point checking = Clock::now();
       if (needs_clearance) {
-        RefineClearanceEdges(edges, progress, cancel, rechecked);
+        RefineClearanceEdges(edges, targets, progress, cancel, rechecked);
       } else {
         CheckEdges(edges, EdgeNeed::kValidity, "check", progress, cancel, rechecked);
       }
+      for (int e : edges) seen_now[e] = 0;
       checking_ms += MsSince(checking);
     };
-    SearchResult best =
-        FindBestPathLazy(graph_, measure, see, exact, evaluate,
-                         cost_to_go.empty() ? nullptr : &cost_to_go, kLazyBatch, &lazy);
+    SearchResult best = FindBestPathLazy(graph_, measure, see, exact, evaluate,
+                                         cost_to_go.empty() ? nullptr : &cost_to_go,
+                                         &goal_distance_, kLazyBatch, &lazy);
     result->stats.search_rounds += lazy.evaluations + 1;
     result->timing.check_ms += checking_ms;
     result->timing.search_ms += MsSince(phase) - checking_ms;
@@ -509,6 +619,7 @@ SearchResult HybridizationSession::SearchBest(const Measure& measure, EdgeNeed f
     }
     if (finish == EdgeNeed::kClearance) ProbeProfileGrids(output_recheck, cancel);
     CheckEdges(output_recheck, finish, "evaluate", progress, cancel, rechecked);
+    for (int e : output_recheck) seen_now[e] = 0;
     result->timing.evaluate_ms += MsSince(phase);
     bool still_valid = true;
     for (int e : output_recheck) {

@@ -153,8 +153,17 @@ class HybridizationSession {
   // that needs clearance: a probe of the middle of the profile's grid, then of its quarters, its
   // eighths, ..., then the whole profile. Each step tightens the edge's bound (or finds the
   // motion in contact), so an edge that stops being wanted never pays for its profile.
-  void RefineClearanceEdges(const std::vector<int>& edge_ids, const ProgressCallback& progress,
-                            const CancelToken& cancel, int64_t* checked);
+  // An edge with a positive target (a clearance that decides its value, from the search) is
+  // proven to keep it or shown not to (ProveClearance), and profiled only if neither holds.
+  void RefineClearanceEdges(const std::vector<int>& edge_ids, const std::vector<double>& targets,
+                            const ProgressCallback& progress, const CancelToken& cancel,
+                            int64_t* checked);
+  // Decides whether edge e keeps clearance >= target all along: samples its profile's grid where
+  // the known clearances (its ends', its probes') do not yet prove it, until they do
+  // (ClearanceFloor >= target), or one sample is below the target, or a contact makes the motion
+  // invalid. Returns false if only the profile can decide (no grid point left where a proof
+  // lacks). Thread safe for distinct edges.
+  bool ProveClearance(int e, double target);
   // Computes the clearances on the profile grids of the edges in parallel, in pieces of each
   // edge, before their profiles (which reuse them, EdgeCheckRequest::known): the output's few
   // long edges would otherwise keep one thread each busy.

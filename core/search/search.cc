@@ -12,6 +12,16 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
+// The widest search's threshold tests (FindBestPathLazy): they stop when the width is known
+// within this factor, or after kMaxThresholdTests; without a proven width the first test is at
+// the widest path under the bounds divided by kFirstCapDivisor. On grid (the first 3 seed-1
+// inputs, all-pairs, a bottleneck requery after a length merge) factors 1.01, 1.02, 1.05 and 1.2
+// took 6759, 7059, 7295 and 23726 distance queries: the final exact search profiles the edges
+// into every node whose width lies between W and the bracket's top.
+constexpr double kThresholdBracket = 1.02;
+constexpr int kMaxThresholdTests = 12;
+constexpr double kFirstCapDivisor = 16;
+
 struct Tree {
   std::vector<double> value;
   std::vector<int> via_edge;  // edge into the node on the best path, or -1
@@ -103,38 +113,69 @@ SearchResult Extract(const HGraph& graph, const Tree& tree) {
 
 // One entry of the lazy open list: `node` reached through `edge` from a settled node whose value
 // is `parent_value`; `key` is the entry's value (kSum: cost so far plus cost to go; widest:
-// width so far) from the edge's bound or its exact value.
+// width so far) from the edge's bound or its exact value. Entries of equal key (many, under a
+// widest search's cap) go by `rank`: an edge that settles the node without a check first, then
+// one checked valid, then the others; and then by `tie`, the node's length to go.
 struct LazyEntry {
   double key = 0;
   double parent_value = 0;
   int node = 0;
   int edge = -1;
+  int rank = 0;
+  double tie = 0;
 };
 
-// The lazy search over one combine rule. `kWidest`: maximise the minimum edge value; otherwise
-// minimise the sum. `see` returns NaN (or +inf for sums) for unusable edges.
+// The lazy search over one combine rule. `kWidest`: maximise the minimum edge value, each capped
+// at `cap`; otherwise minimise the sum. `see` returns NaN (or +inf for sums) for unusable edges.
+// `target` is what a sum search asks `evaluate` to decide (a widest search asks for the key).
 template <bool kWidest>
 SearchResult LazySearch(const HGraph& graph, const SearchEdgeFn& see, const ExactFn& exact,
                         const EvaluateFn& evaluate, const std::vector<double>* cost_to_go,
+                        const std::vector<double>* length_to_go, double cap, double target,
                         int batch, LazySearchStats* stats) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
   const auto h = [&](int n) { return cost_to_go != nullptr ? (*cost_to_go)[n] : 0.0; };
   // Key of an entry through an edge of value `value` from a parent of value `parent`; NaN if the
   // edge is unusable.
   const auto key_of = [&](double parent, double value, int node) {
-    if (std::isnan(value)) return std::numeric_limits<double>::quiet_NaN();
+    if (std::isnan(value)) return nan;
     if constexpr (kWidest) {
-      return std::min(parent, value);
+      return std::min({parent, value, cap});
     } else {
-      if (!(value < kInf)) return std::numeric_limits<double>::quiet_NaN();
+      if (!(value < kInf)) return nan;
       return parent + value + h(node);
     }
   };
-  const auto worse = [](const LazyEntry& a, const LazyEntry& b) {
+  // Whether the edge, seen as `s`, settles an entry of key `key` without a check: it is exact, or
+  // its floor is its bound (kSum) or reaches the key (widest: then min(parent, width, cap) is
+  // the key, whatever the exact width).
+  const auto settles = [&](int e, const SearchEdge& s, double key) {
+    if (exact(e)) return true;
     if constexpr (kWidest) {
-      return a.key < b.key;  // max-heap on width
+      return s.floor > 0 && s.floor >= key;
     } else {
-      return a.key > b.key;  // min-heap on cost
+      return s.floor == s.value;
     }
+  };
+  // Fills the entry's key and order from the edge as seen now; false if the edge is unusable.
+  const auto place = [&](LazyEntry& entry) {
+    const SearchEdge s = see(entry.edge);
+    entry.key = key_of(entry.parent_value, s.value, entry.node);
+    if (std::isnan(entry.key)) return false;
+    entry.rank = settles(entry.edge, s, entry.key) ? 0 : s.checked ? 1 : 2;
+    entry.tie = length_to_go != nullptr ? (*length_to_go)[entry.node] : 0.0;
+    return true;
+  };
+  const auto worse = [](const LazyEntry& a, const LazyEntry& b) {
+    if (a.key != b.key) {
+      if constexpr (kWidest) {
+        return a.key < b.key;  // max-heap on width
+      } else {
+        return a.key > b.key;  // min-heap on cost
+      }
+    }
+    if (a.rank != b.rank) return a.rank > b.rank;
+    return a.tie > b.tie;
   };
   std::priority_queue<LazyEntry, std::vector<LazyEntry>, decltype(worse)> open(worse);
   std::vector<double> value(graph.num_nodes(), kWidest ? -1.0 : kInf);
@@ -145,37 +186,56 @@ SearchResult LazySearch(const HGraph& graph, const SearchEdgeFn& see, const Exac
                       .node = graph.start(),
                       .edge = -1});
   std::vector<LazyEntry> pending;
+  std::vector<LazyEntry> set_aside;
+  std::vector<std::pair<int, double>> wanted;
   std::vector<int> to_check;
+  std::vector<double> targets;
   while (!open.empty()) {
     const LazyEntry top = open.top();
     open.pop();
     if (closed[top.node]) continue;
-    if (top.edge >= 0 && !exact(top.edge)) {
-      // Check this edge and the next most promising unchecked ones together.
+    if (top.edge >= 0 && !settles(top.edge, see(top.edge), top.key)) {
+      // Check this edge and the next most promising unsettled ones together.
       pending.assign(1, top);
+      set_aside.clear();
       while (static_cast<int>(pending.size()) < batch && !open.empty()) {
         const LazyEntry& next = open.top();
         if (closed[next.node]) {
           open.pop();
           continue;
         }
-        if (next.edge < 0 || exact(next.edge)) break;
-        pending.push_back(next);
+        if (next.edge < 0 || settles(next.edge, see(next.edge), next.key)) break;
+        // One edge per node: if the first settles the node, a second would be checked for
+        // nothing.
+        const bool same_node = std::any_of(pending.begin(), pending.end(),
+                                           [&](const LazyEntry& p) { return p.node == next.node; });
+        (same_node ? set_aside : pending).push_back(next);
         open.pop();
       }
+      for (const LazyEntry& entry : set_aside) open.push(entry);
+      wanted.clear();
+      for (const LazyEntry& entry : pending) {
+        wanted.emplace_back(entry.edge, kWidest ? entry.key : target);
+      }
+      std::sort(wanted.begin(), wanted.end());
       to_check.clear();
-      for (const LazyEntry& entry : pending) to_check.push_back(entry.edge);
-      std::sort(to_check.begin(), to_check.end());
-      to_check.erase(std::unique(to_check.begin(), to_check.end()), to_check.end());
-      evaluate(to_check);
+      targets.clear();
+      for (const auto& [e, t] : wanted) {
+        if (!to_check.empty() && to_check.back() == e) {
+          targets.back() = std::fmax(targets.back(), t);  // the larger key asks more
+          continue;
+        }
+        to_check.push_back(e);
+        targets.push_back(t);
+      }
+      evaluate(to_check, targets);
       if (stats != nullptr) {
         ++stats->evaluations;
         stats->edges_evaluated += static_cast<int64_t>(to_check.size());
       }
-      // Each edge is exact now, or its bound is tighter: it goes back with its new key.
+      // Each edge is exact now, or its bounds are tighter: it goes back with its new key.
       for (LazyEntry entry : pending) {
-        entry.key = key_of(entry.parent_value, see(entry.edge).value, entry.node);
-        if (!std::isnan(entry.key)) open.push(entry);
+        if (place(entry)) open.push(entry);
       }
       continue;
     }
@@ -186,9 +246,8 @@ SearchResult LazySearch(const HGraph& graph, const SearchEdgeFn& see, const Exac
     if (top.node == graph.goal()) break;
     for (const auto& [v, e] : graph.neighbours(top.node)) {
       if (closed[v]) continue;
-      const double key = key_of(value[top.node], see(e).value, v);
-      if (std::isnan(key)) continue;
-      open.push(LazyEntry{.key = key, .parent_value = value[top.node], .node = v, .edge = e});
+      LazyEntry entry{.parent_value = value[top.node], .node = v, .edge = e};
+      if (place(entry)) open.push(entry);
     }
   }
   if (!closed[graph.goal()]) return SearchResult{};
@@ -199,26 +258,59 @@ SearchResult LazySearch(const HGraph& graph, const SearchEdgeFn& see, const Exac
 
 SearchResult FindBestPathLazy(const HGraph& graph, const Measure& measure, const SearchEdgeFn& see,
                               const ExactFn& exact, const EvaluateFn& evaluate,
-                              const std::vector<double>* cost_to_go, int batch,
+                              const std::vector<double>* cost_to_go,
+                              const std::vector<double>* length_to_go, int batch,
                               LazySearchStats* stats) {
   batch = std::max(1, batch);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
   if (measure.combine() == Measure::Combine::kSum) {
-    return LazySearch<false>(graph, see, exact, evaluate, cost_to_go, batch, stats);
+    return LazySearch<false>(graph, see, exact, evaluate, cost_to_go, nullptr, kInf,
+                             measure.clearance_target(), batch, stats);
   }
-  // The widest path's width, exactly; then the shortest path whose every edge is at least that
-  // wide (the eager search's tie break), lazily again.
-  const SearchResult widest = LazySearch<true>(graph, see, exact, evaluate, nullptr, batch, stats);
+  // The widest path's width W, exactly. Whether W >= t needs of an edge only a proof that it
+  // keeps t (cheap where clearance is well above t) or a point below t, never its exact width.
+  // So tests at thresholds narrow [lo, hi] around W first: lo the width of a path of proven
+  // floors, hi the widest path under the bounds, each test at their geometric mean. Then a
+  // search whose widths are capped at hi finds W exactly, and needs exact widths only of the
+  // edges narrower than hi, which is then close to W.
+  const SearchEdgeFn proven = [&](int e) {
+    const SearchEdge s = see(e);
+    return SearchEdge{.value = s.floor > 0 ? s.floor : nan, .length = s.length};
+  };
+  double lo = std::max(0.0, WidestPathValue(graph, proven));
+  double hi = WidestPathValue(graph, see);
+  if (hi < 0) return SearchResult{};
+  for (int test = 0; test < kMaxThresholdTests && hi > lo * kThresholdBracket; ++test) {
+    const double tau = lo > 0 ? std::sqrt(lo * hi) : hi / kFirstCapDivisor;
+    const SearchEdgeFn at_tau = [&](int e) {
+      SearchEdge s = see(e);
+      if (!(s.value >= tau)) s.value = nan;
+      return s;
+    };
+    const SearchResult path = LazySearch<true>(graph, at_tau, exact, evaluate, nullptr,
+                                               length_to_go, tau, nan, batch, stats);
+    if (path.found) {
+      lo = std::max(tau, WidestPathValue(graph, proven));
+    } else {
+      hi = tau;
+    }
+    hi = std::min(hi, WidestPathValue(graph, see));
+  }
+  const SearchResult widest =
+      LazySearch<true>(graph, see, exact, evaluate, nullptr, length_to_go, hi, nan, batch, stats);
   if (!widest.found) return widest;
+  // Then the shortest path whose every edge is at least that wide (the eager search's tie break),
+  // lazily again: an edge proven that wide is usable at its length.
   const double width = widest.value;
   const SearchEdgeFn wide_enough = [&](int e) {
     const SearchEdge s = see(e);
-    return SearchEdge{.value = !std::isnan(s.value) && s.value >= width
-                                   ? s.length
-                                   : std::numeric_limits<double>::quiet_NaN(),
-                      .length = s.length};
+    return SearchEdge{.value = !std::isnan(s.value) && s.value >= width ? s.length : nan,
+                      .length = s.length,
+                      .floor = s.floor >= width ? s.length : nan,
+                      .checked = s.checked};
   };
-  SearchResult result =
-      LazySearch<false>(graph, wide_enough, exact, evaluate, nullptr, batch, stats);
+  SearchResult result = LazySearch<false>(graph, wide_enough, exact, evaluate, length_to_go,
+                                          nullptr, kInf, width, batch, stats);
   if (!result.found) return widest;  // cannot happen: the widest path itself qualifies
   result.value = width;
   return result;

@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <vector>
 
 #include "core/hgraph/hgraph.h"
@@ -25,10 +26,14 @@ struct SearchResult {
 };
 
 // An edge as the search sees it: its value under the measure (Measure::EdgeValue or EdgeBound;
-// NaN for an edge the search must not use) and its length.
+// NaN for an edge the search must not use) and its length. For a lazy search also what is
+// proven of it at worst (Measure::EdgeFloor, or the value when exact; NaN if nothing), and
+// whether it was checked valid (a sampled check, without its value yet).
 struct SearchEdge {
   double value = 0;
   double length = 0;
+  double floor = std::numeric_limits<double>::quiet_NaN();
+  bool checked = false;
 };
 using SearchEdgeFn = std::function<SearchEdge(int edge)>;
 
@@ -43,20 +48,27 @@ SearchResult FindBestPath(const HGraph& graph, const Measure& measure, const Sea
 // through it; then it goes back with its exact value, or with a tighter bound (a refinement in
 // steps, for bounds that are cheaper to tighten than to make exact). Returns the same optimum as
 // FindBestPath(graph, measure, see) on the checked graph, with far fewer checks: once a node is
-// settled, no other edge into it is checked. `exact(e)` says whether `see(e)` is exact;
-// `evaluate(edges)` checks the edges so that `see` is exact for them afterwards, or at least
-// tighter (never looser), and exact after finitely many calls. The search
-// evaluates up to `batch` edges at a time (the most promising ones), so a parallel `evaluate`
-// keeps several threads busy. The path's edges are all exact on return.
+// settled, no other edge into it is checked. `exact(e)` says whether `see(e)` is exact. An edge
+// also settles a node when its floor proves what the search needs: its bound (kSum), or a width
+// at least the node's (kBottleneck). `evaluate(edges, targets)` checks the edges so that `see` is
+// exact for them afterwards, or at least tighter (never looser), and exact after finitely many
+// calls; targets[i] is a value that decides edges[i] (kBottleneck: a width; a floor or a bound
+// that reaches past it settles the edge), or NaN. The search evaluates up to `batch` edges at a
+// time (the most promising ones), so a parallel `evaluate` keeps several threads busy.
+// `length_to_go`, if not null, holds per node a lower bound on the length to the goal: the
+// bottleneck search's tie break (the shortest of the widest paths) runs A* on it. The path's
+// edges are all exact, or proven, on return.
 using ExactFn = std::function<bool(int edge)>;
-using EvaluateFn = std::function<void(const std::vector<int>& edges)>;
+using EvaluateFn =
+    std::function<void(const std::vector<int>& edges, const std::vector<double>& targets)>;
 struct LazySearchStats {
   int64_t evaluations = 0;  // calls of `evaluate`
   int64_t edges_evaluated = 0;
 };
 SearchResult FindBestPathLazy(const HGraph& graph, const Measure& measure, const SearchEdgeFn& see,
                               const ExactFn& exact, const EvaluateFn& evaluate,
-                              const std::vector<double>* cost_to_go, int batch,
+                              const std::vector<double>* cost_to_go,
+                              const std::vector<double>* length_to_go, int batch,
                               LazySearchStats* stats);
 
 // The best path over the checked valid edges (every one with a profile if the measure needs

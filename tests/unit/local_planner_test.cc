@@ -297,7 +297,7 @@ TEST(LocalPlannerTest, ProbesAreProfileSamplesAndTightenTheBounds) {
   const auto inverse = Measure::Make({.type = MeasureType::kInverseClearance, .k = 3});
   const auto bottleneck = Measure::Make({.type = MeasureType::kBottleneckClearance});
   std::mt19937_64 rng(11);
-  int compared = 0, tightened = 0;
+  int compared = 0, tightened = 0, floored = 0;
   for (int i = 0; i < 400 && compared < 60; ++i) {
     const Config from = space.Sample(rng);
     Config to = space.Sample(rng);
@@ -341,10 +341,18 @@ TEST(LocalPlannerTest, ProbesAreProfileSamplesAndTightenTheBounds) {
       if (bound > previous * 1.01) ++tightened;
       previous = bound;
       EXPECT_GE(bottleneck->EdgeBound(input), bottleneck->EdgeValue(profile)) << "edge " << i;
+      // The floor lies under every sample of the profile, refinements included.
+      const double floor = ClearanceFloor(input);
+      EXPECT_LE(floor, MinClearance(profile)) << "edge " << i;
+      if (floor > 0) {
+        ++floored;
+        EXPECT_LE(bottleneck->EdgeFloor(input), bottleneck->EdgeValue(profile)) << "edge " << i;
+      }
     }
   }
   EXPECT_GE(compared, 30);
   EXPECT_GT(tightened, compared / 2);
+  EXPECT_GT(floored, compared / 2);
 }
 
 // Collision first: the same samples up to the first point in contact, which it reports with

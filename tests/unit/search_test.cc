@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <functional>
+#include <limits>
 #include <random>
 
 #include "core/hgraph/hgraph.h"
@@ -108,6 +109,104 @@ TEST_P(SearchPropertyTest, EveryMeasureFindsTheExhaustiveOptimum) {
       EXPECT_NEAR(found.quality.length, best.length, 1e-9) << "ties broken by length";
     }
   }
+}
+
+// The lazy search on edges seen through bounds and floors, as lazy evaluation sees them: a check
+// with a target proves the edge keeps it or lowers its bound below it, and only a target at the
+// bound (or none) makes the edge exact. It finds the exhaustive optimum and leaves edges
+// decided without their exact values.
+TEST_P(SearchPropertyTest, LazySearchWithFloorsFindsTheExhaustiveOptimum) {
+  std::mt19937_64 rng(GetParam());
+  std::uniform_real_distribution<double> coord(0, 10), clearance(0.05, 2.0), coin(0, 1);
+  const Space space = Plane();
+  std::vector<InputPath> paths;
+  for (int p = 0; p < 3; ++p) {
+    InputPath path{.name = "p" + std::to_string(p)};
+    path.waypoints.push_back(P(0, 0));
+    for (int k = 0; k < 2 + p; ++k) path.waypoints.push_back(P(coord(rng), coord(rng)));
+    path.waypoints.push_back(P(10, 10));
+    paths.push_back(path);
+  }
+  HGraph graph(space, paths, 1e-9);
+  for (int u = 0; u < graph.num_nodes(); ++u) {
+    for (int v = u + 1; v < graph.num_nodes(); ++v) {
+      if (coin(rng) < 0.5) graph.AddEdge(u, v, false);
+    }
+  }
+  for (int e = 0; e < graph.num_edges(); ++e) {
+    if (!graph.edge(e).input && coin(rng) < 0.3) {
+      graph.mutable_edge(e).report.state = EdgeState::kInvalid;
+      continue;
+    }
+    SetReport(graph, space, e, {clearance(rng), clearance(rng), clearance(rng)});
+  }
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  int decided_inexact = 0;
+  for (const MeasureSpec spec : {MeasureSpec{.type = MeasureType::kBottleneckClearance},
+                                 MeasureSpec{.type = MeasureType::kSafeLength, .safety = 0.3}}) {
+    const auto measure = Measure::Make(spec);
+    const bool widest = measure->combine() == Measure::Combine::kBottleneck;
+    // Per edge: its width (the profile's minimum), a bound above it and a floor below it.
+    const int n = graph.num_edges();
+    std::vector<double> width(n), bound(n), floor(n);
+    std::vector<char> exact(n, 0);
+    for (int e = 0; e < n; ++e) {
+      if (graph.edge(e).report.state != EdgeState::kValid) continue;
+      width[e] = MinClearance(graph.edge(e).report);
+      bound[e] = width[e] + coin(rng);
+      floor[e] = width[e] * coin(rng);
+    }
+    const SearchEdgeFn see = [&](int e) {
+      const double length = graph.edge(e).report.length;
+      if (graph.edge(e).report.state != EdgeState::kValid) {
+        return SearchEdge{.value = nan, .length = length};
+      }
+      const double lo = exact[e] ? width[e] : floor[e];
+      const double hi = exact[e] ? width[e] : bound[e];
+      if (widest) return SearchEdge{.value = hi, .length = length, .floor = lo > 0 ? lo : nan};
+      return SearchEdge{.value = hi >= spec.safety ? length : inf,
+                        .length = length,
+                        .floor = lo >= spec.safety ? length : nan};
+    };
+    const ExactFn is_exact = [&](int e) {
+      return graph.edge(e).report.state != EdgeState::kValid || exact[e];
+    };
+    const EvaluateFn evaluate = [&](const std::vector<int>& edges,
+                                    const std::vector<double>& targets) {
+      ASSERT_EQ(edges.size(), targets.size());
+      for (size_t k = 0; k < edges.size(); ++k) {
+        const int e = edges[k];
+        const double t = targets[k];
+        if (!(t > 0) || t >= bound[e]) {
+          exact[e] = 1;
+        } else if (width[e] >= t) {
+          floor[e] = std::max(floor[e], t);
+        } else {
+          bound[e] = width[e] + 0.5 * (t - width[e]);
+        }
+      }
+    };
+    std::vector<double> to_go(graph.num_nodes());
+    for (int v = 0; v < graph.num_nodes(); ++v) {
+      to_go[v] = space.Distance(graph.node(v).q, graph.node(graph.goal()).q);
+    }
+    const SearchResult lazy = FindBestPathLazy(graph, *measure, see, is_exact, evaluate,
+                                               widest ? nullptr : &to_go, &to_go, 3, nullptr);
+    const SearchResult eager = FindBestPath(graph, spec);
+    ASSERT_EQ(lazy.found, eager.found) << MeasureTypeName(spec.type);
+    if (!eager.found) continue;
+    const PathQuality q = EvaluateEdges(graph, lazy.edges, spec.k);
+    EXPECT_NEAR(Objective(spec, q), eager.objective, 1e-9) << MeasureTypeName(spec.type);
+    EXPECT_NEAR(q.length, eager.quality.length, 1e-9) << MeasureTypeName(spec.type);
+    for (int e = 0; e < n; ++e) {
+      if (graph.edge(e).report.state == EdgeState::kValid && !exact[e] && floor[e] > 0 &&
+          bound[e] > floor[e]) {
+        ++decided_inexact;
+      }
+    }
+  }
+  EXPECT_GT(decided_inexact, 0);
 }
 
 INSTANTIATE_TEST_SUITE_P(Seeds, SearchPropertyTest, ::testing::Range(1, 41));
