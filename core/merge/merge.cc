@@ -47,6 +47,19 @@ const std::vector<std::vector<double>>& ProbeFractions() {
   return fractions;
 }
 
+// Every probe round's fractions, round after round: the points a scan for contact checks before
+// the first probe of an unchecked edge (ScanForContact).
+const std::vector<double>& ScanFractions() {
+  static const std::vector<double> fractions = [] {
+    std::vector<double> out;
+    for (const std::vector<double>& round : ProbeFractions()) {
+      out.insert(out.end(), round.begin(), round.end());
+    }
+    return out;
+  }();
+  return fractions;
+}
+
 // The automatic post-optimization's budget, and the gain below which a round ends it.
 constexpr double kAutomaticOptimizeMs = 2000;
 constexpr double kOptimizeMinGain = 1e-3;
@@ -155,6 +168,7 @@ HybridizationSession::HybridizationSession(const MotionChecker& checker,
   node_clearance_.assign(graph_.num_nodes(), std::numeric_limits<double>::quiet_NaN());
   probes_.assign(graph_.num_edges(), {});
   probe_rounds_.assign(graph_.num_edges(), 0);
+  scanned_.assign(graph_.num_edges(), 0);
   build_timing_.validate_ms = MsSince(started);
 
   // Input edges carry their clearance profile when every input is reported.
@@ -193,6 +207,7 @@ HybridizationSession::HybridizationSession(const MotionChecker& checker,
   motion_bound_.assign(graph_.num_edges(), std::numeric_limits<double>::quiet_NaN());
   probes_.resize(graph_.num_edges());
   probe_rounds_.resize(graph_.num_edges(), 0);
+  scanned_.resize(graph_.num_edges(), 0);
 
   if (eager) {
     phase = Clock::now();
@@ -296,17 +311,19 @@ void HybridizationSession::RefineClearanceEdges(const std::vector<int>& edge_ids
     const int e = probe[k];
     HEdge& edge = graph_.mutable_edge(e);
     if (edge.report.state == EdgeState::kInvalid) return;
+    // An unchecked candidate is often in contact, which collision checks find for a fraction
+    // of a distance query; after the scan every probe point is known free.
+    if (ScanForContact(e)) {
+      in_contact.fetch_add(1, std::memory_order_relaxed);
+      return;
+    }
     std::vector<ClearanceSample>& known = probes_[e];
     std::vector<ClearanceSample> found;
-    // An unchecked candidate is often in contact, which a collision check finds for a fraction
-    // of a distance query; the probe points of one found valid are its checked samples.
-    const ProbeOrder probe_order = edge.report.state == EdgeState::kUnchecked
-                                       ? ProbeOrder::kCollisionFirst
-                                       : ProbeOrder::kDistanceOnly;
     // A round that finds no new point of the grid (a short edge) gives way to the next.
     while (found.empty() && probe_rounds_[e] < rounds) {
       found = checker_->ProbeClearance(graph_.node(edge.u).q, graph_.node(edge.v).q,
-                                       ProbeFractions()[probe_rounds_[e]], known, probe_order);
+                                       ProbeFractions()[probe_rounds_[e]], known,
+                                       ProbeOrder::kDistanceOnly);
       ++probe_rounds_[e];
     }
     AddProbes(e, found);
@@ -325,9 +342,25 @@ void HybridizationSession::RefineClearanceEdges(const std::vector<int>& edge_ids
   *checked += in_contact.load();
 }
 
+bool HybridizationSession::ScanForContact(int e) {
+  HEdge& edge = graph_.mutable_edge(e);
+  if (edge.report.state != EdgeState::kUnchecked || scanned_[e]) return false;
+  scanned_[e] = 1;
+  const std::vector<ClearanceSample> contact =
+      checker_->ProbeClearance(graph_.node(edge.u).q, graph_.node(edge.v).q, ScanFractions(),
+                               probes_[e], ProbeOrder::kCollisionOnly);
+  if (contact.empty()) return false;
+  AddProbes(e, contact);
+  edge.report = EdgeReport{.state = EdgeState::kInvalid,
+                           .length = edge_length_[e],
+                           .invalid_at = contact.front().t,
+                           .distance_queries = 0};
+  return true;
+}
+
 bool HybridizationSession::ProveClearance(int e, double target) {
   HEdge& edge = graph_.mutable_edge(e);
-  if (edge.report.state == EdgeState::kInvalid) return true;
+  if (edge.report.state == EdgeState::kInvalid || ScanForContact(e)) return true;
   const int stretches = checker_->ProfileStretches(edge_length_[e]);
   const double from = node_clearance_[edge.u];
   const double to = node_clearance_[edge.v];
@@ -516,6 +549,7 @@ void HybridizationSession::SyncEdgeData() {
     motion_bound_.push_back(nan);
     probes_.emplace_back();
     probe_rounds_.push_back(0);
+    scanned_.push_back(0);
   }
 }
 

@@ -164,6 +164,10 @@ class HybridizationSession {
   // invalid. Returns false if only the profile can decide (no grid point left where a proof
   // lacks). Thread safe for distinct edges.
   bool ProveClearance(int e, double target);
+  // Once per unchecked edge, before its first probe: a collision check at each probe round's
+  // points (ScanFractions), which finds most candidates in contact for no distance query at all.
+  // Marks the edge invalid and returns true if one is in contact. Thread safe for distinct edges.
+  bool ScanForContact(int e);
   // Computes the clearances on the profile grids of the edges in parallel, in pieces of each
   // edge, before their profiles (which reuse them, EdgeCheckRequest::known): the output's few
   // long edges would otherwise keep one thread each busy.
@@ -201,6 +205,7 @@ class HybridizationSession {
   // before the profile itself (MotionChecker::ProbeClearance), and how many probe rounds ran.
   std::vector<std::vector<ClearanceSample>> probes_;
   std::vector<int8_t> probe_rounds_;
+  std::vector<int8_t> scanned_;  // per edge: ScanForContact ran
 };
 
 // Build + one query.

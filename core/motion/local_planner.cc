@@ -310,10 +310,12 @@ std::vector<ClearanceSample> LocalPlanner::ProbeClearance(const Config& from, co
     const double t = static_cast<double>(k) / segments;
     const bool seen = std::any_of(known.begin(), known.end(),
                                   [t](const ClearanceSample& sample) { return sample.t == t; });
-    if (k > 0 && k < segments && !seen) ks.push_back(k);
+    if (k > 0 && k < segments && !seen && std::find(ks.begin(), ks.end(), k) == ks.end()) {
+      ks.push_back(k);
+    }
   }
-  std::sort(ks.begin(), ks.end());
-  ks.erase(std::unique(ks.begin(), ks.end()), ks.end());
+  // A scan for contact keeps the caller's order (the likeliest points first).
+  if (order != ProbeOrder::kCollisionOnly) std::sort(ks.begin(), ks.end());
   CollisionContext& context = impl_->Context(*world_);
   std::vector<ClearanceSample> out;
   out.reserve(ks.size());
@@ -322,12 +324,13 @@ std::vector<ClearanceSample> LocalPlanner::ProbeClearance(const Config& from, co
   for (int k : ks) {
     const double t = static_cast<double>(k) / segments;
     const Config q = s.Interpolate(from, to, t);
-    if (order == ProbeOrder::kCollisionFirst) {
+    if (order != ProbeOrder::kDistanceOnly) {
       ++checks;
       if (!context.Valid(q)) {
         out.push_back({.t = t, .clearance = 0});
         break;
       }
+      if (order == ProbeOrder::kCollisionOnly) continue;
     }
     ++queries;
     out.push_back({.t = t, .clearance = context.Clearance(q)});

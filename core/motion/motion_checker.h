@@ -85,7 +85,10 @@ inline bool RecordsClearance(EdgeCheckMode mode) {
 // check (about a tenth of a distance query on meshes), which answers "in contact" (clearance 0)
 // on its own and ends the probe there: the motion is invalid, and its other points are not
 // needed. For a caller that expects contact often (lazy evaluation probing bridge candidates).
-enum class ProbeOrder { kDistanceOnly, kCollisionFirst };
+// kCollisionOnly takes no distance query at all: it checks the points in the order given and
+// returns only the first in contact (clearance 0), or nothing; a cheap scan for contact before a
+// caller pays for clearances.
+enum class ProbeOrder { kDistanceOnly, kCollisionFirst, kCollisionOnly };
 
 // Checks straight motions. Implementations must be thread safe: the H-Graph calls CheckEdge
 // from many worker threads at once. Not copyable (polymorphic base).
@@ -115,7 +118,7 @@ class MotionChecker {
   // record there, so that a bound built on them holds for the profile. Lazy evaluation tightens
   // an edge's bound with them before it pays for the whole profile. Empty when the checker
   // cannot say (the default) or no such point is left. Counts a distance query per sample, and
-  // with kCollisionFirst a collision check per sample.
+  // with kCollisionFirst a collision check per sample (kCollisionOnly: see ProbeOrder).
   virtual std::vector<ClearanceSample> ProbeClearance(const Config& from, const Config& to,
                                                       const std::vector<double>& fractions,
                                                       const std::vector<ClearanceSample>& known,

@@ -404,6 +404,62 @@ TEST(LocalPlannerTest, CollisionFirstProbesStopAtContactForLessDistanceQueries) 
   EXPECT_GT(saved, in_contact);
 }
 
+// A scan for contact: collision checks only, in the order given (the middle first here), up to
+// the first point in contact, which is one the distance probes also find in contact; nothing for
+// an edge free at every point.
+TEST(LocalPlannerTest, CollisionOnlyScanFindsContactInTheGivenOrderWithoutDistanceQueries) {
+  const auto world = CircleWorld();
+  const LocalPlanner planner(world, {.resolution = 0.01});
+  const Space& space = world->space();
+  const std::vector<double> fractions = {0.5, 0.25, 0.75, 0.125, 0.375, 0.625, 0.875};
+  std::mt19937_64 rng(17);
+  int in_contact = 0, free = 0;
+  for (int i = 0; i < 200; ++i) {
+    const Config from = space.Sample(rng);
+    const Config to = space.Sample(rng);
+    const int64_t queries = planner.total_distance_queries();
+    const int64_t checks = planner.total_collision_checks();
+    const std::vector<ClearanceSample> scan =
+        planner.ProbeClearance(from, to, fractions, {}, ProbeOrder::kCollisionOnly);
+    EXPECT_EQ(planner.total_distance_queries(), queries);
+    const int64_t scan_checks = planner.total_collision_checks() - checks;
+    const std::vector<ClearanceSample> plain =
+        planner.ProbeClearance(from, to, fractions, {}, ProbeOrder::kDistanceOnly);
+    const auto touching = [&](double t) {
+      return std::any_of(plain.begin(), plain.end(),
+                         [t](const ClearanceSample& p) { return p.t == t && p.clearance <= 0; });
+    };
+    if (scan.empty()) {
+      ++free;
+      EXPECT_EQ(scan_checks, static_cast<int64_t>(plain.size()));
+      for (const ClearanceSample& p : plain) EXPECT_GT(p.clearance, 0) << "edge " << i;
+      continue;
+    }
+    ++in_contact;
+    ASSERT_EQ(scan.size(), 1u);
+    EXPECT_EQ(scan.front().clearance, 0);
+    EXPECT_TRUE(touching(scan.front().t)) << "edge " << i;
+    // The points before it in the given order are free.
+    const int segments = planner.ProfileStretches(space.Distance(from, to));
+    int before = 0;
+    std::vector<double> seen;
+    for (double f : fractions) {
+      const double t = static_cast<double>(std::lround(f * segments)) / segments;
+      if (std::find(seen.begin(), seen.end(), t) != seen.end()) continue;  // checked once
+      seen.push_back(t);
+      const auto at = std::find_if(plain.begin(), plain.end(),
+                                   [&](const ClearanceSample& p) { return p.t == t; });
+      if (at == plain.end()) continue;
+      if (at->t == scan.front().t) break;
+      EXPECT_GT(at->clearance, 0) << "edge " << i;
+      ++before;
+    }
+    EXPECT_EQ(scan_checks, before + 1) << "edge " << i;
+  }
+  EXPECT_GT(in_contact, 20);
+  EXPECT_GT(free, 5);
+}
+
 // A profile that is handed clearances known on its grid (the probes, an end's) records the same
 // samples and verdict as one that queries them all, for fewer distance queries.
 TEST(LocalPlannerTest, ProfileWithKnownGridClearancesEqualsTheFullProfile) {
