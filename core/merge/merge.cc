@@ -301,13 +301,11 @@ void HybridizationSession::RefineClearanceEdges(const std::vector<int>& edge_ids
   for (size_t k = 0; k < prove.size(); ++k) {
     if (undecided[k]) profile.push_back(prove[k].first);
   }
-  // Edges are counted once, when profiled or found in contact. The profiles' grids first, in
-  // pieces over the threads: a batch holds few profiles among cheap probes.
-  ProbeProfileGrids(profile, cancel);
-  CheckEdges(profile, EdgeNeed::kClearance, "check", progress, cancel, checked);
+  // Edges are counted once, when profiled or found in contact. The profiles' grids, in pieces,
+  // and the probes share one parallel loop: a batch holds few profiles among cheap probes, and
+  // one long profile alone would leave the other threads idle. Then the profiles themselves.
   std::atomic<int64_t> in_contact{0};
-  ParallelFor(ResolveThreads(options_.threads), probe.size(), [&](size_t k) {
-    if (cancel.stopped()) return;
+  const auto probe_edge = [&](size_t k) {
     const int e = probe[k];
     HEdge& edge = graph_.mutable_edge(e);
     if (edge.report.state == EdgeState::kInvalid) return;
@@ -337,7 +335,9 @@ void HybridizationSession::RefineClearanceEdges(const std::vector<int>& edge_ids
       in_contact.fetch_add(1, std::memory_order_relaxed);
       break;
     }
-  });
+  };
+  ProbeProfileGrids(profile, cancel, probe.size(), probe_edge);
+  CheckEdges(profile, EdgeNeed::kClearance, "check", progress, cancel, checked);
   cancel.ThrowIfStopped();
   *checked += in_contact.load();
 }
@@ -423,7 +423,8 @@ bool HybridizationSession::ProveClearance(int e, double target) {
 }
 
 void HybridizationSession::ProbeProfileGrids(const std::vector<int>& edge_ids,
-                                             const CancelToken& cancel) {
+                                             const CancelToken& cancel, size_t other_count,
+                                             const std::function<void(size_t)>& other) {
   // Pieces of about this many grid points, so that a few long edges keep every thread busy.
   constexpr int kPiece = 16;
   struct Piece {
@@ -442,10 +443,15 @@ void HybridizationSession::ProbeProfileGrids(const std::vector<int>& edge_ids,
       pieces.push_back(std::move(piece));
     }
   }
-  if (pieces.size() < 2) return;  // nothing to spread over threads
+  // One piece alone is left to the profile, unless other work shares the loop.
+  if (pieces.size() < 2 && other_count == 0) return;
   std::vector<std::vector<ClearanceSample>> found(pieces.size());
-  ParallelFor(ResolveThreads(options_.threads), pieces.size(), [&](size_t k) {
+  ParallelFor(ResolveThreads(options_.threads), pieces.size() + other_count, [&](size_t k) {
     if (cancel.stopped()) return;
+    if (k >= pieces.size()) {
+      other(k - pieces.size());
+      return;
+    }
     const HEdge& edge = graph_.edge(pieces[k].edge);
     found[k] =
         checker_->ProbeClearance(graph_.node(edge.u).q, graph_.node(edge.v).q, pieces[k].fractions,

@@ -4,6 +4,7 @@
 // hgraph.v1 (merge.proto).
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -171,7 +172,10 @@ class HybridizationSession {
   // Computes the clearances on the profile grids of the edges in parallel, in pieces of each
   // edge, before their profiles (which reuse them, EdgeCheckRequest::known): the output's few
   // long edges would otherwise keep one thread each busy.
-  void ProbeProfileGrids(const std::vector<int>& edge_ids, const CancelToken& cancel);
+  // Runs other(0) ... other(other_count - 1) in the same parallel loop (work on other edges).
+  void ProbeProfileGrids(const std::vector<int>& edge_ids, const CancelToken& cancel,
+                         size_t other_count = 0,
+                         const std::function<void(size_t)>& other = nullptr);
   // Adds probed clearances to edge e's, kept sorted by t.
   void AddProbes(int e, const std::vector<ClearanceSample>& found);
   // Computes the clearance of every node that lacks one (the lazy bounds use them). Returns how
