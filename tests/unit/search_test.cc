@@ -54,26 +54,24 @@ std::vector<std::vector<int>> AllPaths(const HGraph& graph) {
   return out;
 }
 
-class SearchPropertyTest : public ::testing::TestWithParam<int> {};
-
-TEST_P(SearchPropertyTest, EveryMeasureFindsTheExhaustiveOptimum) {
-  std::mt19937_64 rng(GetParam());
+// Three random paths from (0,0) to (10,10) with middle[p] random waypoints each, bridges between
+// any two nodes with probability `bridges`, 30% of them invalid, the other edges valid with a
+// random clearance profile of three samples.
+HGraph RandomHGraph(const Space& space, const std::vector<int>& middle, double bridges,
+                    std::mt19937_64& rng) {
   std::uniform_real_distribution<double> coord(0, 10), clearance(0.05, 2.0), coin(0, 1);
-  const Space space = Plane();
-  // Three random paths of 3-4 nodes from (0,0) to (10,10).
   std::vector<InputPath> paths;
-  for (int p = 0; p < 3; ++p) {
+  for (size_t p = 0; p < middle.size(); ++p) {
     InputPath path{.name = "p" + std::to_string(p)};
     path.waypoints.push_back(P(0, 0));
-    const int middle = 1 + p % 2;
-    for (int k = 0; k < middle; ++k) path.waypoints.push_back(P(coord(rng), coord(rng)));
+    for (int k = 0; k < middle[p]; ++k) path.waypoints.push_back(P(coord(rng), coord(rng)));
     path.waypoints.push_back(P(10, 10));
     paths.push_back(path);
   }
   HGraph graph(space, paths, 1e-9);
   for (int u = 0; u < graph.num_nodes(); ++u) {
     for (int v = u + 1; v < graph.num_nodes(); ++v) {
-      if (coin(rng) < 0.4) graph.AddEdge(u, v, false);
+      if (coin(rng) < bridges) graph.AddEdge(u, v, false);
     }
   }
   for (int e = 0; e < graph.num_edges(); ++e) {
@@ -83,6 +81,15 @@ TEST_P(SearchPropertyTest, EveryMeasureFindsTheExhaustiveOptimum) {
     }
     SetReport(graph, space, e, {clearance(rng), clearance(rng), clearance(rng)});
   }
+  return graph;
+}
+
+class SearchPropertyTest : public ::testing::TestWithParam<int> {};
+
+TEST_P(SearchPropertyTest, EveryMeasureFindsTheExhaustiveOptimum) {
+  std::mt19937_64 rng(GetParam());
+  const Space space = Plane();
+  HGraph graph = RandomHGraph(space, {1, 2, 1}, 0.4, rng);
   const std::vector<std::vector<int>> all = AllPaths(graph);
   ASSERT_FALSE(all.empty());
   for (const MeasureSpec spec : {MeasureSpec{.type = MeasureType::kLength},
@@ -117,29 +124,9 @@ TEST_P(SearchPropertyTest, EveryMeasureFindsTheExhaustiveOptimum) {
 // decided without their exact values.
 TEST_P(SearchPropertyTest, LazySearchWithFloorsFindsTheExhaustiveOptimum) {
   std::mt19937_64 rng(GetParam());
-  std::uniform_real_distribution<double> coord(0, 10), clearance(0.05, 2.0), coin(0, 1);
+  std::uniform_real_distribution<double> coin(0, 1);
   const Space space = Plane();
-  std::vector<InputPath> paths;
-  for (int p = 0; p < 3; ++p) {
-    InputPath path{.name = "p" + std::to_string(p)};
-    path.waypoints.push_back(P(0, 0));
-    for (int k = 0; k < 2 + p; ++k) path.waypoints.push_back(P(coord(rng), coord(rng)));
-    path.waypoints.push_back(P(10, 10));
-    paths.push_back(path);
-  }
-  HGraph graph(space, paths, 1e-9);
-  for (int u = 0; u < graph.num_nodes(); ++u) {
-    for (int v = u + 1; v < graph.num_nodes(); ++v) {
-      if (coin(rng) < 0.5) graph.AddEdge(u, v, false);
-    }
-  }
-  for (int e = 0; e < graph.num_edges(); ++e) {
-    if (!graph.edge(e).input && coin(rng) < 0.3) {
-      graph.mutable_edge(e).report.state = EdgeState::kInvalid;
-      continue;
-    }
-    SetReport(graph, space, e, {clearance(rng), clearance(rng), clearance(rng)});
-  }
+  HGraph graph = RandomHGraph(space, {2, 3, 4}, 0.5, rng);
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const double inf = std::numeric_limits<double>::infinity();
   int decided_inexact = 0;
