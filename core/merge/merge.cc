@@ -364,7 +364,8 @@ bool HybridizationSession::ProveClearance(int e, double target) {
   const int stretches = checker_->ProfileStretches(edge_length_[e]);
   const double from = node_clearance_[edge.u];
   const double to = node_clearance_[edge.v];
-  if (stretches < 1 || std::isnan(from) || std::isnan(to)) return false;
+  // An infinite target (no obstacle in reach) asks for the exact width.
+  if (stretches < 1 || std::isnan(from) || std::isnan(to) || !std::isfinite(target)) return false;
   if (std::isnan(motion_bound_[e])) {
     motion_bound_[e] = checker_->MotionBound(graph_.node(edge.u).q, graph_.node(edge.v).q);
   }
