@@ -139,21 +139,23 @@ double ClearanceFloor(const EdgeBoundInput& edge) {
       !std::isfinite(edge.motion_bound)) {
     return -kInf;
   }
-  // The slack of the certified local planner's steps (core/motion/local_planner.cc), for rounding.
-  const double d = edge.motion_bound / 0.999;
   double floor = std::min(edge.clearance_from, edge.clearance_to);
-  double t0 = 0;
-  double c0 = edge.clearance_from;
-  const auto piece = [&](double t1, double c1) {
-    floor = std::min({floor, c1, 0.5 * (c0 + c1 - d * (t1 - t0))});
-    t0 = t1;
-    c0 = c1;
+  ClearanceSample a{.t = 0, .clearance = edge.clearance_from};
+  const auto piece = [&](const ClearanceSample& b) {
+    floor = std::min({floor, b.clearance, StretchFloor(a, b, edge.motion_bound)});
+    a = b;
   };
   if (edge.interior != nullptr) {
-    for (const ClearanceSample& sample : *edge.interior) piece(sample.t, sample.clearance);
+    for (const ClearanceSample& sample : *edge.interior) piece(sample);
   }
-  piece(1.0, edge.clearance_to);
+  piece({.t = 1.0, .clearance = edge.clearance_to});
   return floor;
+}
+
+double StretchFloor(const ClearanceSample& a, const ClearanceSample& b, double motion_bound) {
+  // The slack of the certified local planner's steps (core/motion/local_planner.cc), for rounding.
+  const double d = motion_bound / 0.999;
+  return 0.5 * (a.clearance + b.clearance - d * (b.t - a.t));
 }
 
 namespace {

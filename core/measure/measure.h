@@ -142,6 +142,10 @@ class Measure {
 // samples (c0 at t0, c1 at t1) it is at least (c0 + c1 - D (t1 - t0)) / 2, D the motion bound.
 // -infinity when an end's clearance or the motion bound is unknown.
 double ClearanceFloor(const EdgeBoundInput& edge);
+// The same floor over one stretch between two known samples, for motion bound D of the whole
+// edge (with the certified planner's slack for rounding); ClearanceFloor is the least of these
+// and of the samples.
+double StretchFloor(const ClearanceSample& a, const ClearanceSample& b, double motion_bound);
 
 // Cost of a valid edge under an additive measure (length, inverse clearance, safe length; for
 // safe length, infinity when the edge's clearance is below `safety`).

@@ -307,7 +307,7 @@ void HybridizationSession::RefineClearanceEdges(const std::vector<int>& edge_ids
   std::atomic<int64_t> in_contact{0};
   const auto probe_edge = [&](size_t k) {
     const int e = probe[k];
-    HEdge& edge = graph_.mutable_edge(e);
+    const HEdge& edge = graph_.edge(e);
     if (edge.report.state == EdgeState::kInvalid) return;
     // An unchecked candidate is often in contact, which collision checks find for a fraction
     // of a distance query; after the scan every probe point is known free.
@@ -328,10 +328,7 @@ void HybridizationSession::RefineClearanceEdges(const std::vector<int>& edge_ids
     // A probe in contact: the profile would find the motion invalid there.
     for (const ClearanceSample& sample : found) {
       if (sample.clearance > 0) continue;
-      edge.report = EdgeReport{.state = EdgeState::kInvalid,
-                               .length = edge_length_[e],
-                               .invalid_at = sample.t,
-                               .distance_queries = static_cast<int64_t>(known.size())};
+      MarkInContact(e, sample.t, static_cast<int64_t>(known.size()));
       in_contact.fetch_add(1, std::memory_order_relaxed);
       break;
     }
@@ -342,8 +339,15 @@ void HybridizationSession::RefineClearanceEdges(const std::vector<int>& edge_ids
   *checked += in_contact.load();
 }
 
+void HybridizationSession::MarkInContact(int e, double t, int64_t distance_queries) {
+  graph_.mutable_edge(e).report = EdgeReport{.state = EdgeState::kInvalid,
+                                             .length = edge_length_[e],
+                                             .invalid_at = t,
+                                             .distance_queries = distance_queries};
+}
+
 bool HybridizationSession::ScanForContact(int e) {
-  HEdge& edge = graph_.mutable_edge(e);
+  const HEdge& edge = graph_.edge(e);
   if (edge.report.state != EdgeState::kUnchecked || scanned_[e]) return false;
   scanned_[e] = 1;
   const std::vector<ClearanceSample> contact =
@@ -351,15 +355,12 @@ bool HybridizationSession::ScanForContact(int e) {
                                probes_[e], ProbeOrder::kCollisionOnly);
   if (contact.empty()) return false;
   AddProbes(e, contact);
-  edge.report = EdgeReport{.state = EdgeState::kInvalid,
-                           .length = edge_length_[e],
-                           .invalid_at = contact.front().t,
-                           .distance_queries = 0};
+  MarkInContact(e, contact.front().t, 0);
   return true;
 }
 
 bool HybridizationSession::ProveClearance(int e, double target) {
-  HEdge& edge = graph_.mutable_edge(e);
+  const HEdge& edge = graph_.edge(e);
   if (edge.report.state == EdgeState::kInvalid || ScanForContact(e)) return true;
   const int stretches = checker_->ProfileStretches(edge_length_[e]);
   const double from = node_clearance_[edge.u];
@@ -369,8 +370,7 @@ bool HybridizationSession::ProveClearance(int e, double target) {
   if (std::isnan(motion_bound_[e])) {
     motion_bound_[e] = checker_->MotionBound(graph_.node(edge.u).q, graph_.node(edge.v).q);
   }
-  // As ClearanceFloor (core/measure/measure.h), which decides with the same samples.
-  const double d = motion_bound_[e] / 0.999;
+  const double d = motion_bound_[e];
   if (!std::isfinite(d)) return false;
   // A motion checked valid has no contact on its grid; an unchecked one often has.
   const ProbeOrder order = edge.report.state == EdgeState::kUnchecked ? ProbeOrder::kCollisionFirst
@@ -383,16 +383,15 @@ bool HybridizationSession::ProveClearance(int e, double target) {
   if (narrowest == target) return false;
   for (;;) {
     // The samples in order, ends included; the first stretch between two that their
-    // clearances do not prove above the target.
+    // clearances do not prove above the target (StretchFloor, as ClearanceFloor decides).
     ClearanceSample a{.t = 0, .clearance = from};
-    if (a.clearance < target) return true;
     bool covered = true;
     ClearanceSample gap_from;
     ClearanceSample gap_to;
     for (size_t i = 0; i <= known.size(); ++i) {
       const ClearanceSample b = i < known.size() ? known[i] : ClearanceSample{1.0, to};
       if (b.clearance < target) return true;  // the motion is narrower: decided
-      if (covered && 0.5 * (a.clearance + b.clearance - d * (b.t - a.t)) < target) {
+      if (covered && StretchFloor(a, b, d) < target) {
         covered = false;
         gap_from = a;
         gap_to = b;
@@ -400,7 +399,8 @@ bool HybridizationSession::ProveClearance(int e, double target) {
       a = b;
     }
     if (covered) return true;
-    // A sample at the middle of the stretch neither end proves, on the grid.
+    // A sample at the middle of the stretch neither end proves, on the grid (the reaches need
+    // not be exact: any grid point between the two is progress).
     const double reach_from = (gap_from.clearance - target) / d;
     const double reach_to = (gap_to.clearance - target) / d;
     const double middle = 0.5 * (gap_from.t + reach_from + gap_to.t - reach_to);
@@ -414,10 +414,7 @@ bool HybridizationSession::ProveClearance(int e, double target) {
     if (found.empty()) return false;
     AddProbes(e, found);
     if (found.front().clearance <= 0) {
-      edge.report = EdgeReport{.state = EdgeState::kInvalid,
-                               .length = edge_length_[e],
-                               .invalid_at = found.front().t,
-                               .distance_queries = static_cast<int64_t>(known.size())};
+      MarkInContact(e, found.front().t, static_cast<int64_t>(known.size()));
       return true;
     }
   }
