@@ -152,10 +152,20 @@ double ClearanceFloor(const EdgeBoundInput& edge) {
   return floor;
 }
 
+namespace {
+
+// The motion bound with the slack of the certified local planner's steps
+// (core/motion/local_planner.cc), for rounding.
+double SlackBound(double motion_bound) { return motion_bound / 0.999; }
+
+}  // namespace
+
 double StretchFloor(const ClearanceSample& a, const ClearanceSample& b, double motion_bound) {
-  // The slack of the certified local planner's steps (core/motion/local_planner.cc), for rounding.
-  const double d = motion_bound / 0.999;
-  return 0.5 * (a.clearance + b.clearance - d * (b.t - a.t));
+  return 0.5 * (a.clearance + b.clearance - SlackBound(motion_bound) * (b.t - a.t));
+}
+
+double ReachFloor(const ClearanceSample& a, double t, double motion_bound) {
+  return a.clearance - SlackBound(motion_bound) * std::abs(t - a.t);
 }
 
 namespace {

@@ -146,6 +146,9 @@ double ClearanceFloor(const EdgeBoundInput& edge);
 // edge (with the certified planner's slack for rounding); ClearanceFloor is the least of these
 // and of the samples.
 double StretchFloor(const ClearanceSample& a, const ClearanceSample& b, double motion_bound);
+// The clearance at t that one known sample proves at least (with the same slack): c - D |t - t0|.
+// Positive: the motion is free at t.
+double ReachFloor(const ClearanceSample& a, double t, double motion_bound);
 
 // Cost of a valid edge under an additive measure (length, inverse clearance, safe length; for
 // safe length, infinity when the edge's clearance is below `safety`).

@@ -350,9 +350,29 @@ bool HybridizationSession::ScanForContact(int e) {
   const HEdge& edge = graph_.edge(e);
   if (edge.report.state != EdgeState::kUnchecked || scanned_[e]) return false;
   scanned_[e] = 1;
+  // Points the ends' clearances already prove free (no robot point moves farther than D t from
+  // the start) need no check.
+  std::vector<double> fractions;
+  const double from = node_clearance_[edge.u];
+  const double to = node_clearance_[edge.v];
+  if (std::isnan(from) || std::isnan(to)) {
+    fractions = ScanFractions();
+  } else {
+    if (std::isnan(motion_bound_[e])) {
+      motion_bound_[e] = checker_->MotionBound(graph_.node(edge.u).q, graph_.node(edge.v).q);
+    }
+    const double d = motion_bound_[e];
+    for (double f : ScanFractions()) {
+      if (ReachFloor({.t = 0, .clearance = from}, f, d) > 0 ||
+          ReachFloor({.t = 1, .clearance = to}, f, d) > 0) {
+        continue;
+      }
+      fractions.push_back(f);
+    }
+  }
   const std::vector<ClearanceSample> contact =
-      checker_->ProbeClearance(graph_.node(edge.u).q, graph_.node(edge.v).q, ScanFractions(),
-                               probes_[e], ProbeOrder::kCollisionOnly);
+      checker_->ProbeClearance(graph_.node(edge.u).q, graph_.node(edge.v).q, fractions, probes_[e],
+                               ProbeOrder::kCollisionOnly);
   if (contact.empty()) return false;
   AddProbes(e, contact);
   MarkInContact(e, contact.front().t, 0);
