@@ -368,6 +368,32 @@ TEST(CollisionWorldTest, RejectsAnInvalidSceneNamingTheField) {
   expect_field(so3_only, "robot[0].component");
 }
 
+// Each pair's traversal starts from the clearance found so far and prunes what lies farther:
+// the result must still be the exact least distance, the one the obstacles give one at a time.
+TEST(CollisionWorldTest, ClearanceAmongManyMeshesIsTheLeastOfEachObstacleAlone) {
+  const std::shared_ptr<const Scene> scene = MeshScene();
+  const CollisionWorld world(scene);
+  std::vector<std::unique_ptr<CollisionWorld>> alone;
+  for (const Obstacle& o : scene->obstacles) {
+    auto one = std::make_shared<Scene>(*scene);
+    one->obstacles = {o};
+    alone.push_back(std::make_unique<CollisionWorld>(one));
+  }
+  auto context = world.MakeContext();
+  std::vector<std::unique_ptr<CollisionContext>> alone_contexts;
+  for (const auto& w : alone) alone_contexts.push_back(w->MakeContext());
+  std::mt19937_64 rng(11);
+  int free = 0;
+  for (int i = 0; i < 100; ++i) {
+    const Config q = world.space().Sample(rng);
+    double least = std::numeric_limits<double>::infinity();
+    for (const auto& c : alone_contexts) least = std::min(least, c->Clearance(q));
+    EXPECT_NEAR(context->Clearance(q), least, 1e-12) << q.transpose();
+    free += least > 0;
+  }
+  EXPECT_GT(free, 25);
+}
+
 // --- threads --------------------------------------------------------------------------------
 
 struct Answers {
