@@ -297,7 +297,7 @@ TEST(LocalPlannerTest, ProbesAreProfileSamplesAndTightenTheBounds) {
   const auto inverse = Measure::Make({.type = MeasureType::kInverseClearance, .k = 3});
   const auto bottleneck = Measure::Make({.type = MeasureType::kBottleneckClearance});
   std::mt19937_64 rng(11);
-  int compared = 0, tightened = 0, floored = 0;
+  int compared = 0, tightened = 0, floored = 0, reached = 0;
   for (int i = 0; i < 400 && compared < 60; ++i) {
     const Config from = space.Sample(rng);
     Config to = space.Sample(rng);
@@ -309,6 +309,15 @@ TEST(LocalPlannerTest, ProbesAreProfileSamplesAndTightenTheBounds) {
                          .clearance_from = planner.Clearance(from),
                          .clearance_to = planner.Clearance(to),
                          .motion_bound = planner.MotionBound(from, to)};
+    // What either end proves of the clearance at a point (the scan skips the points it proves
+    // free) lies under the profile there.
+    for (const ClearanceSample& sample : profile.profile) {
+      const double reach = std::max(
+          ReachFloor({.t = 0, .clearance = input.clearance_from}, sample.t, input.motion_bound),
+          ReachFloor({.t = 1, .clearance = input.clearance_to}, sample.t, input.motion_bound));
+      EXPECT_LE(reach, sample.clearance) << "edge " << i << " t " << sample.t;
+      reached += reach > 0;
+    }
     double previous = inverse->EdgeBound(input);
     std::vector<ClearanceSample> probes;
     for (const std::vector<double>& fractions :
@@ -353,6 +362,7 @@ TEST(LocalPlannerTest, ProbesAreProfileSamplesAndTightenTheBounds) {
   EXPECT_GE(compared, 30);
   EXPECT_GT(tightened, compared / 2);
   EXPECT_GT(floored, compared / 2);
+  EXPECT_GT(reached, 2 * compared);
 }
 
 // Collision first: the same samples up to the first point in contact, which it reports with
