@@ -141,8 +141,8 @@ struct DistanceData {
 double PairDistance(const fcl::CollisionObjectd* a, const fcl::CollisionObjectd* b,
                     const fcl::DistanceRequestd& request, double bound) {
   fcl::DistanceResultd result;
-  if (bound < result.min_distance)
-    result.min_distance = bound;  // FCL's own start: the largest double
+  // FCL's own start is the largest double.
+  if (bound < result.min_distance) result.min_distance = bound;
   fcl::distance(a, b, request, result);
   // In collision FCL reports an implementation-defined value (-1 for GJK pairs).
   return std::max(0.0, std::min(bound, result.min_distance));

@@ -339,6 +339,14 @@ void HybridizationSession::RefineClearanceEdges(const std::vector<int>& edge_ids
   *checked += in_contact.load();
 }
 
+double HybridizationSession::MotionBoundOf(int e) {
+  if (std::isnan(motion_bound_[e])) {
+    const HEdge& edge = graph_.edge(e);
+    motion_bound_[e] = checker_->MotionBound(graph_.node(edge.u).q, graph_.node(edge.v).q);
+  }
+  return motion_bound_[e];
+}
+
 void HybridizationSession::MarkInContact(int e, double t, int64_t distance_queries) {
   graph_.mutable_edge(e).report = EdgeReport{.state = EdgeState::kInvalid,
                                              .length = edge_length_[e],
@@ -358,10 +366,7 @@ bool HybridizationSession::ScanForContact(int e) {
   if (std::isnan(from) || std::isnan(to)) {
     fractions = ScanFractions();
   } else {
-    if (std::isnan(motion_bound_[e])) {
-      motion_bound_[e] = checker_->MotionBound(graph_.node(edge.u).q, graph_.node(edge.v).q);
-    }
-    const double d = motion_bound_[e];
+    const double d = MotionBoundOf(e);
     for (double f : ScanFractions()) {
       if (ReachFloor({.t = 0, .clearance = from}, f, d) > 0 ||
           ReachFloor({.t = 1, .clearance = to}, f, d) > 0) {
@@ -387,10 +392,7 @@ bool HybridizationSession::ProveClearance(int e, double target) {
   const double to = node_clearance_[edge.v];
   // An infinite target (no obstacle in reach) asks for the exact width.
   if (stretches < 1 || std::isnan(from) || std::isnan(to) || !std::isfinite(target)) return false;
-  if (std::isnan(motion_bound_[e])) {
-    motion_bound_[e] = checker_->MotionBound(graph_.node(edge.u).q, graph_.node(edge.v).q);
-  }
-  const double d = motion_bound_[e];
+  const double d = MotionBoundOf(e);
   if (!std::isfinite(d)) return false;
   // A motion checked valid has no contact on its grid; an unchecked one often has.
   const ProbeOrder order = edge.report.state == EdgeState::kUnchecked ? ProbeOrder::kCollisionFirst
@@ -502,9 +504,6 @@ int64_t HybridizationSession::ComputeNodeClearances(const CancelToken& cancel) {
 
 EdgeBoundInput HybridizationSession::BoundInput(int e) {
   const HEdge& edge = graph_.edge(e);
-  if (std::isnan(motion_bound_[e])) {
-    motion_bound_[e] = checker_->MotionBound(graph_.node(edge.u).q, graph_.node(edge.v).q);
-  }
   const auto clearance = [&](int n) {
     return std::isnan(node_clearance_[n]) ? std::numeric_limits<double>::infinity()
                                           : node_clearance_[n];
@@ -512,7 +511,7 @@ EdgeBoundInput HybridizationSession::BoundInput(int e) {
   return EdgeBoundInput{.length = edge_length_[e],
                         .clearance_from = clearance(edge.u),
                         .clearance_to = clearance(edge.v),
-                        .motion_bound = motion_bound_[e],
+                        .motion_bound = MotionBoundOf(e),
                         .interior = probes_[e].empty() ? nullptr : &probes_[e]};
 }
 

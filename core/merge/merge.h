@@ -169,6 +169,9 @@ class HybridizationSession {
   // points (ScanFractions), which finds most candidates in contact for no distance query at all.
   // Marks the edge invalid and returns true if one is in contact. Thread safe for distinct edges.
   bool ScanForContact(int e);
+  // Edge e's motion bound (MotionChecker::MotionBound), computed once. Thread safe for distinct
+  // edges.
+  double MotionBoundOf(int e);
   // Edge e is invalid: a point at t of it is in contact (found for this many distance queries).
   void MarkInContact(int e, double t, int64_t distance_queries);
   // Computes the clearances on the profile grids of the edges in parallel, in pieces of each
