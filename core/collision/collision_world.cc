@@ -132,18 +132,30 @@ bool CollideCallback(fcl::CollisionObjectd* a, fcl::CollisionObjectd* b, void* d
 struct DistanceData {
   fcl::DistanceRequestd request;
   double min_distance = std::numeric_limits<double>::infinity();
+  // With nearest points requested: the robot body queried against the obstacles, and the
+  // nearest points (world frame) of the pair that gave min_distance, the body's first.
+  const fcl::CollisionObjectd* body = nullptr;
+  bool found = false;
+  fcl::Vector3d nearest[2];
 };
 
 // The smaller of `bound` and the distance between a and b. FCL's traversal starts from the
 // result's min_distance and prunes every bounding volume no nearer than it, so a pair farther
 // than `bound` (the clearance found so far) costs a few volume tests instead of a whole
-// traversal; a nearer pair's distance is found exactly as from infinity.
+// traversal; a nearer pair's distance is found exactly as from infinity. With nearest points
+// requested, a nearer pair's points (a's first) replace those in `nearest`.
 double PairDistance(const fcl::CollisionObjectd* a, const fcl::CollisionObjectd* b,
-                    const fcl::DistanceRequestd& request, double bound) {
+                    const fcl::DistanceRequestd& request, double bound, bool* found = nullptr,
+                    fcl::Vector3d* nearest = nullptr) {
   fcl::DistanceResultd result;
   // FCL's own start is the largest double.
   if (bound < result.min_distance) result.min_distance = bound;
   fcl::distance(a, b, request, result);
+  if (request.enable_nearest_points && result.min_distance < bound) {
+    *found = true;
+    nearest[0] = result.nearest_points[0];
+    nearest[1] = result.nearest_points[1];
+  }
   // In collision FCL reports an implementation-defined value (-1 for GJK pairs).
   return std::max(0.0, std::min(bound, result.min_distance));
 }
@@ -151,7 +163,10 @@ double PairDistance(const fcl::CollisionObjectd* a, const fcl::CollisionObjectd*
 bool DistanceCallback(fcl::CollisionObjectd* a, fcl::CollisionObjectd* b, void* data,
                       double& dist) {
   auto* d = static_cast<DistanceData*>(data);
-  d->min_distance = PairDistance(a, b, d->request, d->min_distance);
+  // The body's nearest point first, whichever side the broad phase puts it on.
+  const bool body_first = a == d->body;
+  d->min_distance = PairDistance(body_first ? a : b, body_first ? b : a, d->request,
+                                 d->min_distance, &d->found, d->nearest);
   // The broad phase prunes subtrees farther than `dist`.
   dist = d->min_distance;
   return d->min_distance <= 0;
@@ -281,23 +296,65 @@ bool CollisionContext::Valid(const Config& q) {
   return true;
 }
 
-double CollisionContext::Clearance(const Config& q) {
+double CollisionContext::Clearance(const Config& q, ClearanceWitness* witness) {
   ++distance_queries_;
+  if (witness != nullptr) *witness = ClearanceWitness{};
   if (!world_.space().InBounds(q)) return 0.0;
   PlaceBodies(world_, impl_->bodies, q);
   const CollisionWorld::Impl& w = world_.impl();
   DistanceData& data = impl_->distance;
   data.min_distance = std::numeric_limits<double>::infinity();
-  for (const auto& body : impl_->bodies) {
-    w.obstacle_manager.distance(body.get(), &data, DistanceCallback);
+  data.request.enable_nearest_points = witness != nullptr;
+  // Which bodies the nearest points found last belong to (-1: an obstacle).
+  int near_body = -1;
+  int near_other = -1;
+  for (size_t i = 0; i < impl_->bodies.size(); ++i) {
+    data.body = impl_->bodies[i].get();
+    data.found = false;
+    w.obstacle_manager.distance(impl_->bodies[i].get(), &data, DistanceCallback);
     if (data.min_distance <= 0) return 0.0;
+    if (data.found) {
+      near_body = static_cast<int>(i);
+      near_other = -1;
+    }
   }
   for (const auto& [i, j] : w.self_pairs) {
+    data.found = false;
     data.min_distance = PairDistance(impl_->bodies[i].get(), impl_->bodies[j].get(), data.request,
-                                     data.min_distance);
+                                     data.min_distance, &data.found, data.nearest);
     if (data.min_distance <= 0) return 0.0;
+    if (data.found) {
+      near_body = i;
+      near_other = j;
+    }
+  }
+  if (witness != nullptr && near_body >= 0) {
+    const auto local = [&](int body, const fcl::Vector3d& p) -> Eigen::Vector3d {
+      return impl_->bodies[body]->getTransform().inverse() * p;
+    };
+    witness->body = near_body;
+    witness->point = local(near_body, data.nearest[0]);
+    witness->other_body = near_other;
+    witness->other_point = near_other >= 0 ? local(near_other, data.nearest[1]) : data.nearest[1];
   }
   return data.min_distance;
+}
+
+Eigen::Isometry3d CollisionWorld::BodyPose(int body, const Config& q) const {
+  HGRAPH_CHECK(body >= 0 && body < static_cast<int>(impl_->body_offset.size()));
+  return space().Pose(impl_->body_component[body], q) * impl_->body_offset[body];
+}
+
+double CollisionWorld::WitnessDistance(const ClearanceWitness& witness,
+                                       const std::vector<Eigen::Isometry3d>& body_poses) {
+  HGRAPH_CHECK(witness.body >= 0 && witness.body < static_cast<int>(body_poses.size()));
+  const Eigen::Vector3d p = body_poses[witness.body] * witness.point;
+  const Eigen::Vector3d o = witness.other_body < 0
+                                ? witness.other_point
+                                : body_poses[witness.other_body] * witness.other_point;
+  // The points went through a frame change and back: allow for the rounding, and for GJK's
+  // tolerance on the clearance a query reports.
+  return (p - o).norm() + 1e-9 * (1 + p.norm() + o.norm());
 }
 
 }  // namespace hgraph

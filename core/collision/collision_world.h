@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <memory>
 
+#include "core/motion/motion_checker.h"
 #include "core/scene/scene.h"
 #include "core/space/space.h"
 
@@ -30,6 +31,13 @@ class CollisionWorld {
 
   // Makes a query context for one thread.
   std::unique_ptr<CollisionContext> MakeContext() const;
+
+  // World pose of robot body i at q.
+  Eigen::Isometry3d BodyPose(int body, const Config& q) const;
+  // The distance between the witness's two points with the robot at the given body poses
+  // (BodyPose of every body), a little above it for rounding: at least the clearance there.
+  static double WitnessDistance(const ClearanceWitness& witness,
+                                const std::vector<Eigen::Isometry3d>& body_poses);
 
   // Largest distance from the origin of body i's driving frame to any point of the body: bounds
   // how far a body point moves when the frame turns (core/motion's clearance certificate).
@@ -61,7 +69,9 @@ class CollisionContext {
   // on); 0 when in collision or out of bounds; +infinity when there is nothing to measure to.
   // Counts one distance query. FCL meshes are surfaces: a body wholly inside a mesh obstacle is
   // neither in collision nor at zero clearance (primitives are solid).
-  double Clearance(const Config& q);
+  // With a witness: also where the clearance was found (body -1 when nothing was measured or
+  // the robot is in contact or out of bounds).
+  double Clearance(const Config& q, ClearanceWitness* witness = nullptr);
 
   int64_t collision_checks() const { return collision_checks_; }
   int64_t distance_queries() const { return distance_queries_; }

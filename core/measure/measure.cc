@@ -132,6 +132,30 @@ double MinKnownClearance(const EdgeBoundInput& edge) {
   return c;
 }
 
+// Calls f(t, c) for the probed points and the ceilings in order of t, interior points only, the
+// smaller value where both have one.
+template <typename F>
+void ForEachInteriorCeiling(const EdgeBoundInput& edge, F&& f) {
+  static const std::vector<ClearanceSample> kNone;
+  const std::vector<ClearanceSample>& a = edge.interior != nullptr ? *edge.interior : kNone;
+  const std::vector<ClearanceSample>& b = edge.ceiling != nullptr ? *edge.ceiling : kNone;
+  size_t i = 0;
+  size_t j = 0;
+  while (i < a.size() || j < b.size()) {
+    if (j == b.size() || (i < a.size() && a[i].t < b[j].t)) {
+      f(a[i].t, a[i].clearance);
+      ++i;
+    } else if (i == a.size() || b[j].t < a[i].t) {
+      f(b[j].t, b[j].clearance);
+      ++j;
+    } else {
+      f(a[i].t, std::min(a[i].clearance, b[j].clearance));
+      ++i;
+      ++j;
+    }
+  }
+}
+
 }  // namespace
 
 double ClearanceFloor(const EdgeBoundInput& edge) {
@@ -187,16 +211,17 @@ class InverseClearanceMeasure final : public Measure {
   explicit InverseClearanceMeasure(const MeasureSpec& spec) : Measure(spec) {}
   Combine combine() const override { return Combine::kSum; }
   bool needs_clearance() const override { return spec().k != 0; }
+  bool uses_ceilings() const override { return spec().k != 0; }
   double EdgeValue(const EdgeReport& report) const override {
     return InverseClearanceIntegral(report, spec().k);
   }
   double cost_per_distance() const override { return spec().k == 0 ? 1 : 0; }
-  // Clearance changes no faster than robot points move, so between two samples (c0 at t0, c1 at
-  // t1; the ends and the probed interior points) it is at most
-  // u(t) = min(c0 + D (t - t0), c1 + D (t1 - t)), D the motion bound. The profile's samples lie
-  // under u, the probed points are among them, and u^-k is convex between two probed points (a
-  // convex decreasing function of a concave one), so the trapezoid sum over the profile is at
-  // least length * integral of u^-k.
+  // Clearance changes no faster than robot points move, so between two grid points with known
+  // clearances or ceilings (c0 at t0, c1 at t1; the ends, the probed points, the ceilings) it is
+  // at most u(t) = min(c0 + D (t - t0), c1 + D (t1 - t)), D the motion bound. The profile's
+  // samples lie under u, its grid holds t0 and t1, and u^-k is convex between them (a convex
+  // decreasing function of a concave one), so the trapezoid sum over the profile is at least
+  // length * integral of u^-k.
   double EdgeBound(const EdgeBoundInput& edge) const override {
     const double k = spec().k;
     if (k == 0) return edge.length;
@@ -225,9 +250,7 @@ class InverseClearanceMeasure final : public Measure {
       t0 = t1;
       c0 = c1;
     };
-    if (edge.interior != nullptr) {
-      for (const ClearanceSample& sample : *edge.interior) piece(sample.t, sample.clearance);
-    }
+    ForEachInteriorCeiling(edge, piece);
     piece(1.0, edge.clearance_to);
     // A little slack for rounding: the bound must never exceed the checked cost.
     return edge.length * integral * (1 - 1e-9);

@@ -72,14 +72,21 @@ class QualityAccumulator {
 
 // What is known of an edge before it is checked: its length (Space::Distance), the clearance at
 // its two end configurations (infinity when not computed), how far any robot point moves along
-// it (MotionChecker::MotionBound; infinity when unknown), and clearances probed at interior
-// points of its profile's grid (MotionChecker::ProbeClearance; sorted by t, may be null).
+// it (MotionChecker::MotionBound; infinity when unknown), clearances probed at interior
+// points of its profile's grid (MotionChecker::ProbeClearance; sorted by t, may be null), and
+// upper bounds on the clearance at other grid points.
 struct EdgeBoundInput {
   double length = 0;
   double clearance_from = std::numeric_limits<double>::infinity();
   double clearance_to = std::numeric_limits<double>::infinity();
   double motion_bound = std::numeric_limits<double>::infinity();
   const std::vector<ClearanceSample>* interior = nullptr;
+  // Upper bounds on the clearance at interior points of the profile's grid (the distances of
+  // the known samples' witnesses there, MotionChecker::LowerToWitnesses; sorted by t, may be
+  // null). Tighter than the motion bound where the nearest robot point moves less than the
+  // farthest. For the measures that use them (Measure::uses_ceilings) in their bound; never in a
+  // floor (a proof of clearance).
+  const std::vector<ClearanceSample>* ceiling = nullptr;
 };
 
 // A quality measure as the search sees it (paper, Appendix): the value of a checked edge, a bound
@@ -105,6 +112,9 @@ class Measure {
   virtual bool needs_clearance() const = 0;
   // True if EdgeBound uses the clearance at the edge's end configurations.
   virtual bool needs_node_clearance() const { return needs_clearance(); }
+  // True if EdgeBound uses EdgeBoundInput::ceiling (worth their cost only where the bound
+  // follows the clearance all along the edge: inverse clearance).
+  virtual bool uses_ceilings() const { return false; }
   // The value of a valid, checked edge (with its profile if needs_clearance): its cost (kSum;
   // infinity = unusable) or its width (kBottleneck: its minimum clearance).
   virtual double EdgeValue(const EdgeReport& report) const = 0;

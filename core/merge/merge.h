@@ -156,9 +156,10 @@ class HybridizationSession {
   // motion in contact), so an edge that stops being wanted never pays for its profile.
   // An edge with a positive target (a clearance that decides its value, from the search) is
   // proven to keep it or shown not to (ProveClearance), and profiled only if neither holds.
+  // With `ceilings`, the probed edges' ceilings are brought up to date in the same parallel loop.
   void RefineClearanceEdges(const std::vector<int>& edge_ids, const std::vector<double>& targets,
-                            const ProgressCallback& progress, const CancelToken& cancel,
-                            int64_t* checked);
+                            bool ceilings, const ProgressCallback& progress,
+                            const CancelToken& cancel, int64_t* checked);
   // Decides whether edge e keeps clearance >= target all along: samples its profile's grid where
   // the known clearances (its ends', its probes') do not yet prove it, until they do
   // (ClearanceFloor >= target), or one sample is below the target, or a contact makes the motion
@@ -182,12 +183,16 @@ class HybridizationSession {
                          size_t other_count = 0,
                          const std::function<void(size_t)>& other = nullptr);
   // Adds probed clearances to edge e's, kept sorted by t.
-  void AddProbes(int e, const std::vector<ClearanceSample>& found);
+  void AddProbes(int e, const std::vector<ClearanceSample>& found,
+                 const std::vector<ClearanceWitness>* witnesses = nullptr);
   // Computes the clearance of every node that lacks one (the lazy bounds use them). Returns how
   // many it computed.
   int64_t ComputeNodeClearances(const CancelToken& cancel);
-  // What the search knows of edge e before its check.
-  EdgeBoundInput BoundInput(int e);
+  // What the search knows of edge e before its check (with its ceilings, if asked).
+  EdgeBoundInput BoundInput(int e, bool ceilings);
+  // Edge e's ceilings (EdgeBoundInput::ceiling), computed when its ends' or probes' witnesses
+  // change. Thread safe for distinct edges.
+  const std::vector<ClearanceSample>& CeilingOf(int e);
   // Extends the per-node and per-edge data to nodes and edges added since.
   void SyncEdgeData();
   // The best path under `measure` with every edge checked, and then certified (`finish`
@@ -209,12 +214,18 @@ class HybridizationSession {
   std::vector<double> edge_length_;     // per edge: Space::Distance of its ends
   std::vector<double> motion_bound_;    // per edge: MotionChecker::MotionBound, NaN until needed
   std::vector<double> node_clearance_;  // per node: clearance, NaN until needed
-  std::vector<double> goal_distance_;   // per node: Space::Distance to the goal
+  std::vector<ClearanceWitness> node_witness_;  // per node: where its clearance was found
+  std::vector<double> goal_distance_;           // per node: Space::Distance to the goal
   // Per edge, for measures that need clearance: the clearances probed on its profile's grid
   // before the profile itself (MotionChecker::ProbeClearance), and how many probe rounds ran.
   std::vector<std::vector<ClearanceSample>> probes_;
   std::vector<int8_t> probe_rounds_;
   std::vector<int8_t> scanned_;  // per edge: ScanForContact ran
+  // Per edge: upper bounds on its clearance at points of its profile's grid, from its ends'
+  // witnesses (EdgeBoundInput::ceiling), once both ends have one.
+  std::vector<std::vector<ClearanceSample>> ceiling_;
+  std::vector<int8_t> ceiling_done_;
+  std::vector<std::vector<ClearanceWitness>> probe_witness_;  // per edge: its probes' witnesses
 };
 
 // Build + one query.

@@ -292,14 +292,47 @@ double LocalPlanner::Clearance(const Config& q) const {
   return impl_->Context(*world_).Clearance(q);
 }
 
+double LocalPlanner::ClearanceAndWitness(const Config& q, ClearanceWitness* witness) const {
+  ++impl_->distance_queries;
+  return impl_->Context(*world_).Clearance(q, witness);
+}
+
+void LocalPlanner::LowerToWitnesses(const Config& from, const Config& to,
+                                    const std::vector<ClearanceWitness>& witnesses,
+                                    std::vector<ClearanceSample>* points) const {
+  const size_t bodies = impl_->body_component.size();
+  std::vector<char> used(bodies, 0);
+  bool any = false;
+  for (const ClearanceWitness& w : witnesses) {
+    if (w.body < 0) continue;
+    used[w.body] = 1;
+    if (w.other_body >= 0) used[w.other_body] = 1;
+    any = true;
+  }
+  if (!any) return;
+  const Space& s = space();
+  std::vector<Eigen::Isometry3d> poses(bodies, Eigen::Isometry3d::Identity());
+  for (ClearanceSample& point : *points) {
+    const Config q = s.Interpolate(from, to, point.t);
+    for (size_t b = 0; b < bodies; ++b) {
+      if (used[b]) poses[b] = world_->BodyPose(static_cast<int>(b), q);
+    }
+    for (const ClearanceWitness& w : witnesses) {
+      if (w.body >= 0) {
+        point.clearance = std::min(point.clearance, CollisionWorld::WitnessDistance(w, poses));
+      }
+    }
+  }
+}
+
 double LocalPlanner::MotionBound(const Config& a, const Config& b) const {
   return RobotMotionBound(space(), impl_->body_component, impl_->body_radius, a, b);
 }
 
-std::vector<ClearanceSample> LocalPlanner::ProbeClearance(const Config& from, const Config& to,
-                                                          const std::vector<double>& fractions,
-                                                          const std::vector<ClearanceSample>& known,
-                                                          ProbeOrder order) const {
+std::vector<ClearanceSample> LocalPlanner::ProbeClearance(
+    const Config& from, const Config& to, const std::vector<double>& fractions,
+    const std::vector<ClearanceSample>& known, ProbeOrder order,
+    std::vector<ClearanceWitness>* witnesses) const {
   const Space& s = space();
   HGRAPH_CHECK(from.size() == s.dimension() && to.size() == s.dimension());
   // The profile's grid (CheckEdge): t = k / segments, the configuration interpolated from `from`.
@@ -333,7 +366,10 @@ std::vector<ClearanceSample> LocalPlanner::ProbeClearance(const Config& from, co
       if (order == ProbeOrder::kCollisionOnly) continue;
     }
     ++queries;
-    out.push_back({.t = t, .clearance = context.Clearance(q)});
+    ClearanceWitness witness;
+    out.push_back(
+        {.t = t, .clearance = context.Clearance(q, witnesses != nullptr ? &witness : nullptr)});
+    if (witness.body >= 0) witnesses->push_back(witness);
     if (order == ProbeOrder::kCollisionFirst && out.back().clearance <= 0) break;
   }
   impl_->collision_checks += checks;

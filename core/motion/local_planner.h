@@ -40,11 +40,15 @@ class LocalPlanner final : public MotionChecker {
   EdgeReport CheckEdge(const EdgeCheckRequest& request) const override;
   bool IsValid(const Config& q) const override;
   double Clearance(const Config& q) const override;
+  double ClearanceAndWitness(const Config& q, ClearanceWitness* witness) const override;
+  void LowerToWitnesses(const Config& from, const Config& to,
+                        const std::vector<ClearanceWitness>& witnesses,
+                        std::vector<ClearanceSample>* points) const override;
   double MotionBound(const Config& a, const Config& b) const override;
-  std::vector<ClearanceSample> ProbeClearance(const Config& from, const Config& to,
-                                              const std::vector<double>& fractions,
-                                              const std::vector<ClearanceSample>& known,
-                                              ProbeOrder order) const override;
+  std::vector<ClearanceSample> ProbeClearance(
+      const Config& from, const Config& to, const std::vector<double>& fractions,
+      const std::vector<ClearanceSample>& known, ProbeOrder order,
+      std::vector<ClearanceWitness>* witnesses = nullptr) const override;
   int ProfileStretches(double length) const override { return SampleCount(length) - 1; }
   int64_t total_collision_checks() const override;
   int64_t total_distance_queries() const override;

@@ -9,6 +9,18 @@
 
 namespace hgraph {
 
+// Where a clearance was found: a point of robot body `body`, in the body's own frame (its world
+// pose is the body's pose times the point), and the point nearest to it, of an obstacle (in the
+// world frame, other_body == -1) or of another body (in that body's frame). The two points stay
+// on the robot and the obstacle as the robot moves, so the distance between them, at any
+// configuration, bounds the clearance there from above. body == -1: none known.
+struct ClearanceWitness {
+  int body = -1;
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();
+  int other_body = -1;
+  Eigen::Vector3d other_point = Eigen::Vector3d::Zero();
+};
+
 // State of an edge in the H-Graph. Unchecked edges exist for the lazy variant, which checks an
 // edge only when a search wants it.
 enum class EdgeState { kUnchecked, kValid, kInvalid };
@@ -103,6 +115,25 @@ class MotionChecker {
   virtual EdgeReport CheckEdge(const EdgeCheckRequest& request) const = 0;
   virtual bool IsValid(const Config& q) const = 0;
   virtual double Clearance(const Config& q) const = 0;
+  // The clearance at q and where it was found (a witness with body -1 when the checker cannot
+  // say, the default). Counts one distance query.
+  virtual double ClearanceAndWitness(const Config& q, ClearanceWitness* witness) const {
+    *witness = ClearanceWitness{};
+    return Clearance(q);
+  }
+  // Lowers the clearance of each point (at its t along the straight motion from `from` to `to`)
+  // to the distance between the points of each witness there (ClearanceWitness), which bounds
+  // the clearance at t from above. Lazy evaluation bounds an unchecked edge's clearance with the
+  // witnesses of its ends and probes, tighter than the motion bound alone. Witnesses with
+  // body -1 are skipped; the default leaves the points as they are.
+  virtual void LowerToWitnesses(const Config& from, const Config& to,
+                                const std::vector<ClearanceWitness>& witnesses,
+                                std::vector<ClearanceSample>* points) const {
+    (void)from;
+    (void)to;
+    (void)witnesses;
+    (void)points;
+  }
   // An upper bound on how far any point of the robot moves along the straight motion from a to
   // b (and so on how much the clearance can change along it: clearance is 1-Lipschitz in that
   // displacement). Lazy evaluation bounds an unchecked edge's clearance with it. Infinity when
@@ -118,16 +149,18 @@ class MotionChecker {
   // record there, so that a bound built on them holds for the profile. Lazy evaluation tightens
   // an edge's bound with them before it pays for the whole profile. Empty when the checker
   // cannot say (the default) or no such point is left. Counts a distance query per sample, and
-  // with kCollisionFirst a collision check per sample (kCollisionOnly: see ProbeOrder).
-  virtual std::vector<ClearanceSample> ProbeClearance(const Config& from, const Config& to,
-                                                      const std::vector<double>& fractions,
-                                                      const std::vector<ClearanceSample>& known,
-                                                      ProbeOrder order) const {
+  // with kCollisionFirst a collision check per sample (kCollisionOnly: see ProbeOrder). With
+  // `witnesses`, appends where each measured clearance was found (those the checker knows).
+  virtual std::vector<ClearanceSample> ProbeClearance(
+      const Config& from, const Config& to, const std::vector<double>& fractions,
+      const std::vector<ClearanceSample>& known, ProbeOrder order,
+      std::vector<ClearanceWitness>* witnesses = nullptr) const {
     (void)from;
     (void)to;
     (void)fractions;
     (void)known;
     (void)order;
+    (void)witnesses;
     return {};
   }
   // The number of stretches a clearance profile of a motion of this length samples (its grid

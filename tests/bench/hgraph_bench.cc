@@ -46,14 +46,22 @@ class CountingChecker final : public MotionChecker {
   }
   bool IsValid(const Config& q) const override { return inner_.IsValid(q); }
   double Clearance(const Config& q) const override { return inner_.Clearance(q); }
+  double ClearanceAndWitness(const Config& q, ClearanceWitness* witness) const override {
+    return inner_.ClearanceAndWitness(q, witness);
+  }
+  void LowerToWitnesses(const Config& from, const Config& to,
+                        const std::vector<ClearanceWitness>& witnesses,
+                        std::vector<ClearanceSample>* points) const override {
+    inner_.LowerToWitnesses(from, to, witnesses, points);
+  }
   double MotionBound(const Config& a, const Config& b) const override {
     return inner_.MotionBound(a, b);
   }
-  std::vector<ClearanceSample> ProbeClearance(const Config& from, const Config& to,
-                                              const std::vector<double>& fractions,
-                                              const std::vector<ClearanceSample>& known,
-                                              ProbeOrder order) const override {
-    return inner_.ProbeClearance(from, to, fractions, known, order);
+  std::vector<ClearanceSample> ProbeClearance(
+      const Config& from, const Config& to, const std::vector<double>& fractions,
+      const std::vector<ClearanceSample>& known, ProbeOrder order,
+      std::vector<ClearanceWitness>* witnesses = nullptr) const override {
+    return inner_.ProbeClearance(from, to, fractions, known, order, witnesses);
   }
   int ProfileStretches(double length) const override { return inner_.ProfileStretches(length); }
   int64_t total_collision_checks() const override { return inner_.total_collision_checks(); }

@@ -394,6 +394,76 @@ TEST(CollisionWorldTest, ClearanceAmongManyMeshesIsTheLeastOfEachObstacleAlone) 
   EXPECT_GT(free, 25);
 }
 
+// --- witnesses --------------------------------------------------------------------------------
+
+std::vector<Eigen::Isometry3d> BodyPoses(const CollisionWorld& world, const Config& q) {
+  std::vector<Eigen::Isometry3d> poses;
+  for (size_t b = 0; b < world.scene().robot.size(); ++b) {
+    poses.push_back(world.BodyPose(static_cast<int>(b), q));
+  }
+  return poses;
+}
+
+// Where a clearance was found: the witness's points are as far apart as the clearance at the
+// configuration queried, and at any other configuration at least as far apart as the clearance
+// there (the upper bound lazy evaluation takes). Asking for the witness leaves the clearance as
+// it was. Returns how many witnesses pointed at another body.
+int ExpectWitnessesBoundClearance(const CollisionWorld& world, uint64_t seed) {
+  auto context = world.MakeContext();
+  std::mt19937_64 rng(seed);
+  int witnessed = 0;
+  int to_bodies = 0;
+  for (int i = 0; i < 60; ++i) {
+    const Config q = world.space().Sample(rng);
+    ClearanceWitness witness;
+    const double clearance = context->Clearance(q, &witness);
+    EXPECT_EQ(clearance, context->Clearance(q)) << q.transpose();
+    if (!(clearance > 0) || !std::isfinite(clearance)) {
+      EXPECT_EQ(witness.body, -1) << q.transpose();
+      continue;
+    }
+    if (witness.body < 0) {
+      ADD_FAILURE() << "no witness at " << q.transpose();
+      continue;
+    }
+    ++witnessed;
+    to_bodies += witness.other_body >= 0;
+    const double apart = CollisionWorld::WitnessDistance(witness, BodyPoses(world, q));
+    EXPECT_GE(apart, clearance) << q.transpose();
+    EXPECT_NEAR(apart, clearance, 1e-6 * (1 + clearance)) << q.transpose();
+    // Elsewhere: along a motion from q, and anywhere.
+    const Config far = world.space().Sample(rng);
+    for (int j = 1; j <= 10; ++j) {
+      const Config other = world.space().Interpolate(q, far, j / 10.0);
+      const double there = context->Clearance(other);
+      const double bound = CollisionWorld::WitnessDistance(witness, BodyPoses(world, other));
+      EXPECT_GE(bound, there) << q.transpose() << " -> " << other.transpose();
+    }
+  }
+  EXPECT_GT(witnessed, 20);
+  return to_bodies;
+}
+
+TEST(CollisionWorldTest, WitnessesOfMeshClearancesBoundItElsewhere) {
+  const CollisionWorld world(MeshScene());
+  EXPECT_EQ(ExpectWitnessesBoundClearance(world, 3), 0);
+}
+
+TEST(CollisionWorldTest, WitnessesOfATurningBoxAmongDiscsBoundItElsewhere) {
+  auto scene = std::make_shared<Scene>(*CircleScene(LoadDiscs(), 0.0));
+  scene->space = Space::SE2(Eigen::Vector2d(0, -5), Eigen::Vector2d(70, 70));
+  scene->robot[0].shape = BoxShape(Eigen::Vector3d(2, 1, 1));
+  scene->robot[0].offset.translation() = Eigen::Vector3d(0.5, 0, 0);
+  const CollisionWorld world(scene);
+  EXPECT_EQ(ExpectWitnessesBoundClearance(world, 4), 0);
+}
+
+// Between two bodies the witness's second point moves with the second body.
+TEST(CollisionWorldTest, WitnessesBetweenRobotBodiesMoveWithBoth) {
+  const CollisionWorld world(TwoBoxesScene(true, 1));
+  EXPECT_GT(ExpectWitnessesBoundClearance(world, 5), 20);
+}
+
 // --- threads --------------------------------------------------------------------------------
 
 struct Answers {

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <random>
 #include <stdexcept>
 #include <string>
@@ -363,6 +364,63 @@ TEST(LocalPlannerTest, ProbesAreProfileSamplesAndTightenTheBounds) {
   EXPECT_GT(tightened, compared / 2);
   EXPECT_GT(floored, compared / 2);
   EXPECT_GT(reached, 2 * compared);
+}
+
+// The witnesses of an edge's ends and probes bound its clearance from above at every grid point
+// (the ceilings lazy evaluation takes): each ceiling lies over the profile's sample there, the
+// inverse clearance bound they give still lies under the edge's cost, and they tighten it on
+// most edges.
+TEST(LocalPlannerTest, WitnessCeilingsLieOverTheProfileAndTightenTheBounds) {
+  const auto world = CircleWorld();
+  const LocalPlanner planner(world, {.resolution = 0.01});
+  const Space& space = world->space();
+  const auto inverse = Measure::Make({.type = MeasureType::kInverseClearance, .k = 3});
+  std::mt19937_64 rng(12);
+  int compared = 0, tightened = 0, ceilings = 0;
+  for (int i = 0; i < 400 && compared < 60; ++i) {
+    const Config from = space.Sample(rng);
+    Config to = space.Sample(rng);
+    to.head<2>() = from.head<2>() + 0.2 * (to.head<2>() - from.head<2>());
+    const EdgeReport profile = Check(planner, from, to, true);
+    if (profile.state != EdgeState::kValid || !profile.certified) continue;
+    ++compared;
+    std::vector<ClearanceWitness> witnesses(2);
+    const int64_t before = planner.total_distance_queries();
+    EdgeBoundInput input{.length = profile.length,
+                         .clearance_from = planner.ClearanceAndWitness(from, &witnesses[0]),
+                         .clearance_to = planner.ClearanceAndWitness(to, &witnesses[1]),
+                         .motion_bound = planner.MotionBound(from, to)};
+    EXPECT_EQ(planner.total_distance_queries() - before, 2);
+    EXPECT_EQ(input.clearance_from, profile.profile.front().clearance);
+    const std::vector<ClearanceSample> probes = planner.ProbeClearance(
+        from, to, {0.25, 0.5, 0.75}, {}, ProbeOrder::kDistanceOnly, &witnesses);
+    EXPECT_EQ(witnesses.size(), 2 + probes.size());
+    input.interior = &probes;
+    const double without = inverse->EdgeBound(input);
+    // A ceiling at every interior grid point.
+    const int stretches = planner.ProfileStretches(profile.length);
+    std::vector<ClearanceSample> ceiling;
+    for (int k = 1; k < stretches; ++k) {
+      ceiling.push_back({.t = static_cast<double>(k) / stretches,
+                         .clearance = std::numeric_limits<double>::infinity()});
+    }
+    planner.LowerToWitnesses(from, to, witnesses, &ceiling);
+    for (const ClearanceSample& c : ceiling) {
+      const auto in_profile = std::find_if(profile.profile.begin(), profile.profile.end(),
+                                           [&](const ClearanceSample& p) { return p.t == c.t; });
+      ASSERT_NE(in_profile, profile.profile.end()) << "edge " << i << " t " << c.t;
+      EXPECT_GE(c.clearance, in_profile->clearance) << "edge " << i << " t " << c.t;
+      ceilings += std::isfinite(c.clearance);
+    }
+    input.ceiling = &ceiling;
+    const double with = inverse->EdgeBound(input);
+    EXPECT_LE(with, inverse->EdgeValue(profile)) << "edge " << i;
+    EXPECT_GE(with, without * (1 - 1e-12)) << "edge " << i;
+    tightened += with > without * 1.01;
+  }
+  EXPECT_GE(compared, 30);
+  EXPECT_GT(ceilings, 3 * compared);
+  EXPECT_GT(tightened, compared / 2);
 }
 
 // Collision first: the same samples up to the first point in contact, which it reports with
