@@ -549,6 +549,8 @@ int Main(int argc, char** argv) {
   std::string command = "build/hgraph-bench --runs " + std::to_string(runs) + " --seed " +
                         std::to_string(seed) + " --out " + out + " --scenes";
   for (const auto& s : scene_names) command += " " + s;
+  command += " --inverse-clearance-scenes";
+  for (const auto& s : ic_scenes) command += " " + s;
 
   const fs::path source(HGRAPH_SOURCE_DIR);
   const fs::path out_dir(out);
