@@ -1023,6 +1023,11 @@ size_t HybridizationSession::memory_bytes() const {
            sizeof(double);
   bytes += probes_.capacity() * sizeof(std::vector<ClearanceSample>) + probe_rounds_.capacity();
   for (const auto& samples : probes_) bytes += samples.capacity() * sizeof(ClearanceSample);
+  bytes += node_witness_.capacity() * sizeof(ClearanceWitness) + ceiling_done_.capacity() +
+           ceiling_.capacity() * sizeof(std::vector<ClearanceSample>) +
+           probe_witness_.capacity() * sizeof(std::vector<ClearanceWitness>);
+  for (const auto& samples : ceiling_) bytes += samples.capacity() * sizeof(ClearanceSample);
+  for (const auto& w : probe_witness_) bytes += w.capacity() * sizeof(ClearanceWitness);
   return bytes;
 }
 
