@@ -538,7 +538,7 @@ const std::vector<ClearanceSample>& HybridizationSession::CeilingOf(int e) {
   const HEdge& edge = graph_.edge(e);
   const ClearanceWitness& from = node_witness_[edge.u];
   const ClearanceWitness& to = node_witness_[edge.v];
-  if (from.body < 0 && to.body < 0) return ceiling_[e];
+  if (from.body < 0 && to.body < 0 && probe_witness_[e].empty()) return ceiling_[e];
   ceiling_done_[e] = 1;
   ceiling_[e].clear();
   const int stretches = checker_->ProfileStretches(edge_length_[e]);

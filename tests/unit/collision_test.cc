@@ -458,6 +458,19 @@ TEST(CollisionWorldTest, WitnessesOfATurningBoxAmongDiscsBoundItElsewhere) {
   EXPECT_EQ(ExpectWitnessesBoundClearance(world, 4), 0);
 }
 
+// Sphere against cylinder and sphere against box: closed-form distances in FCL, not GJK.
+TEST(CollisionWorldTest, WitnessesOfADiscAmongDiscsAndBoxesBoundItElsewhere) {
+  auto scene = std::make_shared<Scene>(*CircleScene(LoadDiscs(), 1.0));
+  for (int i = 0; i < 6; ++i) {
+    Obstacle box{.shape = BoxShape(Eigen::Vector3d(4, 2, 2))};
+    box.pose.translation() = Eigen::Vector3d(10 * i + 5, 30, 0);
+    box.pose.linear() = Eigen::AngleAxisd(0.3 * i, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    scene->obstacles.push_back(box);
+  }
+  const CollisionWorld world(scene);
+  EXPECT_EQ(ExpectWitnessesBoundClearance(world, 6), 0);
+}
+
 // Between two bodies the witness's second point moves with the second body.
 TEST(CollisionWorldTest, WitnessesBetweenRobotBodiesMoveWithBoth) {
   const CollisionWorld world(TwoBoxesScene(true, 1));
