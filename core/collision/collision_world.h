@@ -8,9 +8,10 @@
 #include <atomic>
 #include <cstdint>
 #include <memory>
+#include <vector>
 
-#include "core/motion/motion_checker.h"
 #include "core/scene/scene.h"
+#include "core/space/clearance_witness.h"
 #include "core/space/space.h"
 
 namespace hgraph {
