@@ -29,7 +29,7 @@ port=$(sed -n 's/.*grpc_port=\([0-9]*\).*/\1/p' "$out/server.out")
 echo "hgraph-server listening on 127.0.0.1:$port (log: $out/server.log)"
 
 "$build/hgraph" plan --server "127.0.0.1:$port" --scene "$scene" --planner prm --count 3 \
-  --time 5 --seed 1 --out "$out/inputs.json"
+  --time 30 --seed 1 --out "$out/inputs.json"
 "$build/hgraph" merge --server "127.0.0.1:$port" --scene "$scene" --paths "$out/inputs.json" \
   --variant all-pairs --max-node-spacing 0.5 --measure length \
   --out "$out/result.json" --out-path "$out/merged.json" --svg "$out/grid.svg"

@@ -673,9 +673,9 @@ def test_merge_whose_session_is_deleted_meanwhile_still_answers(server):
                     other.delete_session(session)
                 deleted.append(True)
 
-        merged = c.merge(densified(40), variant="all-pairs", evaluation="eager",
+        merged = c.merge(densified(30), variant="all-pairs", evaluation="eager",
                          optimize_ms=0, on_progress=on_progress, progress_interval_ms=10,
-                         timeout=120)
+                         timeout=300)
         assert deleted
         assert merged.result.quality.length > 0
         assert len(merged.result.path.waypoints) >= 2

@@ -274,6 +274,12 @@ class Stats:
             return True
         return False
 
+    def draining(self):
+        """Whether the restart is under way: the old server answers health NOT_SERVING while it
+        drains (SIGTERM), as it should."""
+        lo, hi = self.restart_window
+        return lo <= time.monotonic() <= hi
+
     def lost_by_restart(self, origin):
         """Whether something made at `origin` (monotonic time: a session, an H-Graph) may be on a
         server that has since been restarted."""
@@ -596,7 +602,7 @@ def deadline_storm(stats, target, scene_path, stop, timeout):
             stats.add("storm_calls")
         # The server must answer at once after a storm.
         try:
-            if health(b"", timeout=10) != HEALTH_SERVING:
+            if health(b"", timeout=10) != HEALTH_SERVING and not stats.draining():
                 stats.note("unhealthy", "Health", "not SERVING after a deadline storm")
         except grpc.RpcError as e:
             if not stats.explained(e.code()):
@@ -611,7 +617,7 @@ def health_prober(stats, target, stop):
     while not stop.wait(0.5):
         try:
             answer = health(b"", timeout=10)
-            if answer != HEALTH_SERVING:
+            if answer != HEALTH_SERVING and not stats.draining():
                 stats.note("unhealthy", "Health", f"answered {answer!r}")
         except grpc.RpcError as e:
             if not stats.explained(e.code()):
