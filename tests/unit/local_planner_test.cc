@@ -76,6 +76,25 @@ EdgeReport Check(const LocalPlanner& planner, const Config& from, const Config& 
        .mode = need_clearance ? EdgeCheckMode::kClearance : EdgeCheckMode::kSampled});
 }
 
+// Short random motions of the circle world (a fifth of a random step) whose clearance profile is
+// valid and certified: visit(i, from, to, profile) for up to 60 of 400 draws; returns how many.
+template <typename Visit>
+int ForShortFreeMotions(const LocalPlanner& planner, uint64_t seed, Visit visit) {
+  const Space& space = planner.space();
+  std::mt19937_64 rng(seed);
+  int visited = 0;
+  for (int i = 0; i < 400 && visited < 60; ++i) {
+    const Config from = space.Sample(rng);
+    Config to = space.Sample(rng);
+    to.head<2>() = from.head<2>() + 0.2 * (to.head<2>() - from.head<2>());
+    const EdgeReport profile = Check(planner, from, to, true);
+    if (profile.state != EdgeState::kValid || !profile.certified) continue;
+    ++visited;
+    visit(i, from, to, profile);
+  }
+  return visited;
+}
+
 TEST(LocalPlannerTest, RejectsBadResolution) {
   const auto world = PointWorld({});
   for (double bad : {0.0, -0.1, std::nan("")}) {
@@ -294,18 +313,10 @@ TEST(LocalPlannerTest, CertifyAgreesWithTheClearanceCheckAndCostsLess) {
 TEST(LocalPlannerTest, ProbesAreProfileSamplesAndTightenTheBounds) {
   const auto world = CircleWorld();
   const LocalPlanner planner(world, {.resolution = 0.01});
-  const Space& space = world->space();
   const auto inverse = Measure::Make({.type = MeasureType::kInverseClearance, .k = 3});
   const auto bottleneck = Measure::Make({.type = MeasureType::kBottleneckClearance});
-  std::mt19937_64 rng(11);
-  int compared = 0, tightened = 0, floored = 0, reached = 0;
-  for (int i = 0; i < 400 && compared < 60; ++i) {
-    const Config from = space.Sample(rng);
-    Config to = space.Sample(rng);
-    to.head<2>() = from.head<2>() + 0.2 * (to.head<2>() - from.head<2>());
-    const EdgeReport profile = Check(planner, from, to, true);
-    if (profile.state != EdgeState::kValid || !profile.certified) continue;
-    ++compared;
+  int tightened = 0, floored = 0, reached = 0;
+  const auto visit = [&](int i, const Config& from, const Config& to, const EdgeReport& profile) {
     EdgeBoundInput input{.length = profile.length,
                          .clearance_from = planner.Clearance(from),
                          .clearance_to = planner.Clearance(to),
@@ -359,7 +370,8 @@ TEST(LocalPlannerTest, ProbesAreProfileSamplesAndTightenTheBounds) {
         EXPECT_LE(bottleneck->EdgeFloor(input), bottleneck->EdgeValue(profile)) << "edge " << i;
       }
     }
-  }
+  };
+  const int compared = ForShortFreeMotions(planner, 11, visit);
   EXPECT_GE(compared, 30);
   EXPECT_GT(tightened, compared / 2);
   EXPECT_GT(floored, compared / 2);
@@ -373,17 +385,9 @@ TEST(LocalPlannerTest, ProbesAreProfileSamplesAndTightenTheBounds) {
 TEST(LocalPlannerTest, WitnessCeilingsLieOverTheProfileAndTightenTheBounds) {
   const auto world = CircleWorld();
   const LocalPlanner planner(world, {.resolution = 0.01});
-  const Space& space = world->space();
   const auto inverse = Measure::Make({.type = MeasureType::kInverseClearance, .k = 3});
-  std::mt19937_64 rng(12);
-  int compared = 0, tightened = 0, ceilings = 0;
-  for (int i = 0; i < 400 && compared < 60; ++i) {
-    const Config from = space.Sample(rng);
-    Config to = space.Sample(rng);
-    to.head<2>() = from.head<2>() + 0.2 * (to.head<2>() - from.head<2>());
-    const EdgeReport profile = Check(planner, from, to, true);
-    if (profile.state != EdgeState::kValid || !profile.certified) continue;
-    ++compared;
+  int tightened = 0, ceilings = 0;
+  const auto visit = [&](int i, const Config& from, const Config& to, const EdgeReport& profile) {
     std::vector<ClearanceWitness> witnesses(2);
     const int64_t before = planner.total_distance_queries();
     EdgeBoundInput input{.length = profile.length,
@@ -417,7 +421,8 @@ TEST(LocalPlannerTest, WitnessCeilingsLieOverTheProfileAndTightenTheBounds) {
     EXPECT_LE(with, inverse->EdgeValue(profile)) << "edge " << i;
     EXPECT_GE(with, without * (1 - 1e-12)) << "edge " << i;
     tightened += with > without * 1.01;
-  }
+  };
+  const int compared = ForShortFreeMotions(planner, 12, visit);
   EXPECT_GE(compared, 30);
   EXPECT_GT(ceilings, 3 * compared);
   EXPECT_GT(tightened, compared / 2);
