@@ -274,11 +274,12 @@ class Stats:
             return True
         return False
 
-    def draining(self):
-        """Whether the restart is under way: the old server answers health NOT_SERVING while it
-        drains (SIGTERM), as it should."""
+    def overlaps_restart(self, asked):
+        """Whether a call asked at `asked` (monotonic time) and answered now overlapped the
+        restart: the old server answers health NOT_SERVING while it drains (SIGTERM), as it
+        should."""
         lo, hi = self.restart_window
-        return lo <= time.monotonic() <= hi
+        return asked <= hi and time.monotonic() >= lo
 
     def lost_by_restart(self, origin):
         """Whether something made at `origin` (monotonic time: a session, an H-Graph) may be on a
@@ -601,8 +602,9 @@ def deadline_storm(stats, target, scene_path, stop, timeout):
                           ((C.NOT_FOUND,) if session.stale() else ()))
             stats.add("storm_calls")
         # The server must answer at once after a storm.
+        asked = time.monotonic()
         try:
-            if health(b"", timeout=10) != HEALTH_SERVING and not stats.draining():
+            if health(b"", timeout=10) != HEALTH_SERVING and not stats.overlaps_restart(asked):
                 stats.note("unhealthy", "Health", "not SERVING after a deadline storm")
         except grpc.RpcError as e:
             if not stats.explained(e.code()):
@@ -615,9 +617,10 @@ def health_prober(stats, target, stop):
     channel = grpc.insecure_channel(target)
     health = channel.unary_unary("/grpc.health.v1.Health/Check")
     while not stop.wait(0.5):
+        asked = time.monotonic()
         try:
             answer = health(b"", timeout=10)
-            if answer != HEALTH_SERVING and not stats.draining():
+            if answer != HEALTH_SERVING and not stats.overlaps_restart(asked):
                 stats.note("unhealthy", "Health", f"answered {answer!r}")
         except grpc.RpcError as e:
             if not stats.explained(e.code()):
