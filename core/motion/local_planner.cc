@@ -200,7 +200,7 @@ EdgeReport LocalPlanner::CheckEdge(const EdgeCheckRequest& request) const {
   }
   report.state = EdgeState::kValid;
   if (request.mode == EdgeCheckMode::kSampled) return finish();
-  if (request.mode == EdgeCheckMode::kCertified) {
+  if (request.mode == EdgeCheckMode::kCertified || request.mode == EdgeCheckMode::kCertifiedQuick) {
     // Conservative advancement (see EdgeCheckMode::kCertified), two-sided: the motion bound is
     // linear in t along a straight motion, so a clearance c at t frees the robot for c / bound
     // of the way on either side of t. The next sample goes where, were its clearance c too, the
@@ -243,6 +243,7 @@ EdgeReport LocalPlanner::CheckEdge(const EdgeCheckRequest& request) const {
       report.certified = true;
       return finish();
     }
+    if (request.mode == EdgeCheckMode::kCertifiedQuick) return finish();
   }
 
   std::vector<Config> grid;

@@ -59,6 +59,13 @@ enum class EdgeCheckMode {
   // Where the steps would shrink below the profile's finest refinement, the kClearance check
   // runs instead, so the answer is the one kClearance would give. Sets report.certified.
   kCertified,
+  // As kCertified, except where conservative advancement stalls: the answer is then "valid, not
+  // certified" at once (the samples at the resolution passed), without the kClearance check
+  // kCertified runs there. For a caller that takes only proven motions and has other candidates
+  // to try (the post-optimization's shortcuts): a motion that grazes an obstacle costs a few
+  // distance queries instead of a profile. It certifies a motion only where kCertified's
+  // advancement does, and finds a collision only where that advancement does.
+  kCertifiedQuick,
   // Validity and the clearance profile with its certificate (core/motion/local_planner.h).
   kClearance,
   // As kClearance for a motion that already passed the validity check at this checker's

@@ -308,6 +308,56 @@ TEST(LocalPlannerTest, CertifyAgreesWithTheClearanceCheckAndCostsLess) {
   EXPECT_FALSE(thin.certified);
 }
 
+// certify quick: kCertified's advancement without the profile where it stalls. It certifies
+// only what certify certifies, finds the same collisions where it finds any, never costs more
+// distance queries, and gives a grazing motion up after a query or two where certify profiles it.
+TEST(LocalPlannerTest, QuickCertifyGivesUpWhereAdvancementStalls) {
+  const auto world = CircleWorld();
+  const LocalPlanner planner(world, {.resolution = 0.02});
+  std::mt19937_64 rng(6);
+  int certified = 0, invalid = 0;
+  for (int i = 0; i < 300; ++i) {
+    const Config from = world->space().Sample(rng);
+    Config to = world->space().Sample(rng);
+    to.head<2>() = from.head<2>() + 0.15 * (to.head<2>() - from.head<2>());
+    const EdgeReport full =
+        planner.CheckEdge({.from = &from, .to = &to, .mode = EdgeCheckMode::kCertified});
+    const EdgeReport quick =
+        planner.CheckEdge({.from = &from, .to = &to, .mode = EdgeCheckMode::kCertifiedQuick});
+    EXPECT_LE(quick.distance_queries, full.distance_queries) << "edge " << i;
+    EXPECT_FALSE(quick.has_clearance) << "edge " << i;
+    if (quick.state == EdgeState::kInvalid) {
+      ++invalid;
+      EXPECT_EQ(full.state, EdgeState::kInvalid) << "edge " << i;
+      EXPECT_EQ(full.invalid_at, quick.invalid_at) << "edge " << i;
+    } else if (quick.certified) {
+      ++certified;
+      EXPECT_TRUE(full.certified) << "edge " << i;
+      EXPECT_EQ(full.distance_queries, quick.distance_queries) << "edge " << i;
+    }
+  }
+  EXPECT_GT(certified, 30);
+  EXPECT_GT(invalid, 10);
+
+  // A motion along a box's top face, 1e-7 above it: the advancement stalls at once. Certify
+  // profiles it (and cannot certify it either); quick gives up after the first query.
+  const LocalPlanner planner_box(PointWorld({Box(5, 5, 2, 2)}), {.resolution = 0.01});
+  const Config a = Vec({4.5, 6 + 1e-7}), b = Vec({5.5, 6 + 1e-7});
+  const EdgeReport full =
+      planner_box.CheckEdge({.from = &a, .to = &b, .mode = EdgeCheckMode::kCertified});
+  const EdgeReport quick =
+      planner_box.CheckEdge({.from = &a, .to = &b, .mode = EdgeCheckMode::kCertifiedQuick});
+  EXPECT_EQ(full.state, EdgeState::kValid);
+  EXPECT_FALSE(full.certified);
+  EXPECT_EQ(quick.state, EdgeState::kValid);
+  EXPECT_FALSE(quick.certified);
+  EXPECT_EQ(quick.distance_queries, 1);
+  EXPECT_GT(full.distance_queries, 8);
+  std::printf("[ box face ] distance queries: certify %lld, quick %lld\n",
+              static_cast<long long>(full.distance_queries),
+              static_cast<long long>(quick.distance_queries));
+}
+
 // Probes are samples of the profile: same t, same clearance. Bounds built on them hold for the
 // profile's values (inverse clearance below, bottleneck above) and tighten as probes are added.
 TEST(LocalPlannerTest, ProbesAreProfileSamplesAndTightenTheBounds) {
