@@ -63,8 +63,8 @@ enum class EdgeCheckMode {
   // certified" at once (the samples at the resolution passed), without the kClearance check
   // kCertified runs there. For a caller that takes only proven motions and has other candidates
   // to try (the post-optimization's shortcuts): a motion that grazes an obstacle costs a few
-  // distance queries instead of a profile. It certifies a motion only where kCertified's
-  // advancement does, and finds a collision only where that advancement does.
+  // distance queries instead of a profile. It certifies a motion, or finds it in collision, only
+  // where kCertified's samples and advancement do.
   kCertifiedQuick,
   // Validity and the clearance profile with its certificate (core/motion/local_planner.h).
   kClearance,
