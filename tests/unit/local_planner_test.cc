@@ -310,7 +310,7 @@ TEST(LocalPlannerTest, CertifyAgreesWithTheClearanceCheckAndCostsLess) {
 
 // certify quick: kCertified's advancement without the profile where it stalls. It certifies
 // only what certify certifies, finds the same collisions where it finds any, never costs more
-// distance queries, and gives a grazing motion up after a query or two where certify profiles it.
+// distance queries, and gives a grazing motion up after its first query where certify profiles it.
 TEST(LocalPlannerTest, QuickCertifyGivesUpWhereAdvancementStalls) {
   const auto world = CircleWorld();
   const LocalPlanner planner(world, {.resolution = 0.02});
