@@ -41,6 +41,7 @@ struct MergeFlags {
   std::string evaluation = "lazy";
   double optimize_ms = -1;
   bool report_inputs = false;
+  bool partial_shortcuts = false;
   int threads = 0;
   bool quiet = false;
   // Set when the flag was given; unset flags leave the proto field unset (core defaults).
@@ -95,6 +96,7 @@ v1::MergePathsRequest BuildRequest(const MergeFlags& f, const v1::Scene& scene,
                                 ? v1::EVALUATION_EAGER
                                 : v1::EVALUATION_LAZY);
     options->set_report_inputs(f.report_inputs);
+    options->set_partial_shortcuts(f.partial_shortcuts);
     if (f.optimize_ms_opt->count() > 0) options->set_optimize_ms(f.optimize_ms);
     options->set_threads(f.threads);
     MeasureFromProto(request.measure());
@@ -228,6 +230,9 @@ Subcommand AddMergeCommand(CLI::App& parent) {
       "--optimize-ms", f.optimize_ms,
       "Budget of the post-optimization (certified shortcuts re-hybridized, length and "
       "safe-length), ms; 0 = off (default: automatic, until a round gains < 0.1%, <= 2000 ms)");
+  app->add_flag("--partial-shortcuts", f.partial_shortcuts,
+                "A quarter of the post-optimization's shortcuts move one part (a translation or "
+                "a rotation) alone: ~1% shorter paths for ~18% more checks");
   app->add_flag("--report-inputs", f.report_inputs,
                 "Check every input edge with its clearance, so every input is fully reported "
                 "(always so with --evaluation eager)");

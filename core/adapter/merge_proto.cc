@@ -127,6 +127,7 @@ MergeOptions MergeOptionsFromProto(const v1::MergeOptions& proto) {
                        "unknown evaluation " + std::to_string(proto.evaluation()));
   }
   options.report_inputs = proto.report_inputs();
+  options.partial_shortcuts = proto.partial_shortcuts();
   if (proto.has_optimize_ms()) {
     limits::RequireRange(proto.optimize_ms(), 0, limits::kMaxOptimizeMs, "options.optimize_ms");
     options.optimize_ms = proto.optimize_ms();

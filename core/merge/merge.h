@@ -44,6 +44,9 @@ struct MergeOptions {
   // Anytime post-optimization budget in ms (see merge.proto MergeOptions.optimize_ms): < 0
   // automatic, 0 off.
   double optimize_ms = -1;
+  // A quarter of the post-optimization's random shortcuts are partial (ShortcutRequest::partial):
+  // shorter paths on average for more checks (see merge.proto MergeOptions.partial_shortcuts).
+  bool partial_shortcuts = false;
   double endpoint_tolerance = kEndpointTolerance;
   int threads = 0;  // worker threads; 0 = all cores
   // > 0: input edges longer than this are subdivided in the H-Graph (see HGraph); 0 = off.

@@ -63,15 +63,18 @@ constexpr int kMinAttempts = 30;
 constexpr double kMinCornerCut = 1.0 / 16;
 constexpr double kMinCornerGain = 1e-4;
 
-// A random shortcut of a batch: from a (fraction t0 of edge e0) to b (t1 of edge e1), what it
-// gains, and the check of its motion.
+// A random shortcut of a batch: from a (fraction t0 of edge e0) to b (t1 of edge e1), straight
+// or through `points` (a partial shortcut's waypoints), what it gains, and the checks of its
+// motions in order, up to the first one not proven free.
 struct Candidate {
   size_t e0 = 0;
   size_t e1 = 0;
   Config a;
   Config b;
+  std::vector<Config> points;
   double gain = 0;
-  EdgeReport report;
+  std::vector<EdgeReport> reports;
+  bool free = false;
 };
 
 }  // namespace
@@ -164,6 +167,8 @@ ShortcutResult ShortcutCertified(const MotionChecker& checker, const ShortcutReq
 
   // Random pairs of points along the path, a batch at a time.
   std::mt19937_64 rng(request.seed);
+  const std::vector<Space::Part> parts = space.Parts();
+  std::uniform_real_distribution<double> share(0.0, 1.0);
   const int attempts =
       request.corners_only ? 0
       : request.attempts > 0
@@ -188,6 +193,7 @@ ShortcutResult ShortcutCertified(const MotionChecker& checker, const ShortcutReq
     };
     std::vector<Candidate> batch;
     for (int drawn = 0; drawn < kShortcutBatch && attempt < attempts; ++drawn, ++attempt) {
+      const bool partial = request.partial > 0 && parts.size() >= 2 && share(rng) < request.partial;
       double s0 = position(rng);
       double s1 = position(rng);
       if (s0 > s1) std::swap(s0, s1);
@@ -198,21 +204,48 @@ ShortcutResult ShortcutCertified(const MotionChecker& checker, const ShortcutReq
       if (c.e0 == c.e1) continue;  // one straight edge: nothing to gain
       c.a = space.Interpolate(q[c.e0], q[c.e0 + 1], t0);
       c.b = space.Interpolate(q[c.e1], q[c.e1 + 1], t1);
-      const double direct = space.Distance(c.a, c.b);
       // What the stretch from a to b costs now, along the path.
       double along = (1 - t0) * edges[c.e0].length + t1 * edges[c.e1].length;
       for (size_t j = c.e0 + 1; j < c.e1; ++j) along += edges[j].length;
-      if (direct >= along * (1 - 1e-9)) continue;
-      c.gain = along - direct;
+      double cost = 0;
+      if (partial && along > 0) {
+        // The part moves straight from a to b, as far along at each waypoint as the path is.
+        const Space::Part part =
+            parts[std::uniform_int_distribution<size_t>(0, parts.size() - 1)(rng)];
+        double at = (1 - t0) * edges[c.e0].length;
+        const Config* previous = &c.a;
+        c.points.reserve(c.e1 - c.e0);
+        for (size_t j = c.e0 + 1; j <= c.e1; ++j) {
+          Config m = q[j];
+          m.segment(part.offset, part.size) =
+              space.Interpolate(c.a, c.b, at / along).segment(part.offset, part.size);
+          cost += space.Distance(*previous, m);
+          c.points.push_back(std::move(m));
+          previous = &c.points.back();
+          at += edges[j].length;
+        }
+        cost += space.Distance(*previous, c.b);
+      } else {
+        cost = space.Distance(c.a, c.b);
+      }
+      if (cost >= along * (1 - 1e-9)) continue;
+      c.gain = along - cost;
       batch.push_back(std::move(c));
     }
     if (batch.empty()) continue;
     ParallelFor(threads, batch.size(), [&](size_t k) {
-      if (cancel.stopped()) return;
-      batch[k].report = Check(checker, batch[k].a, batch[k].b, request.safety);
+      Candidate& c = batch[k];
+      for (size_t j = 0; j <= c.points.size(); ++j) {
+        if (cancel.stopped()) return;
+        const Config& from = j == 0 ? c.a : c.points[j - 1];
+        const Config& to = j < c.points.size() ? c.points[j] : c.b;
+        c.reports.push_back(Check(checker, from, to, request.safety));
+        if (!ProvenFree(c.reports.back(), request.safety)) return;
+      }
+      c.free = true;
     });
     cancel.ThrowIfStopped();
-    out.edges_checked += static_cast<int64_t>(batch.size());
+    for (const Candidate& c : batch) out.edges_checked += static_cast<int64_t>(c.reports.size());
     // The free ones that gain most, no two sharing an edge of the path; applied from the end of
     // the path so that the edge indices of the others stay valid.
     std::vector<size_t> order(batch.size());
@@ -221,7 +254,7 @@ ShortcutResult ShortcutCertified(const MotionChecker& checker, const ShortcutReq
                      [&](size_t x, size_t y) { return batch[x].gain > batch[y].gain; });
     std::vector<size_t> taken;
     for (size_t k : order) {
-      if (!ProvenFree(batch[k].report, request.safety)) continue;
+      if (!batch[k].free) continue;
       const bool overlaps = std::any_of(taken.begin(), taken.end(), [&](size_t o) {
         return !(batch[k].e1 < batch[o].e0 || batch[o].e1 < batch[k].e0);
       });
@@ -243,7 +276,12 @@ ShortcutResult ShortcutCertified(const MotionChecker& checker, const ShortcutReq
         ni.push_back(-1);
         ne.push_back(std::move(head));
       }
-      ne.push_back(std::move(c.report));
+      for (size_t j = 0; j < c.points.size(); ++j) {
+        nq.push_back(std::move(c.points[j]));
+        ni.push_back(-1);
+        ne.push_back(std::move(c.reports[j]));
+      }
+      ne.push_back(std::move(c.reports.back()));
       if (tail.length > 0) {
         nq.push_back(c.b);
         ni.push_back(-1);

@@ -36,6 +36,12 @@ struct ShortcutRequest {
   // Only cut corners (see ShortcutCertified), no waypoint drops or random pairs: the final
   // polish of a path that random shortcuts no longer improve.
   bool corners_only = false;
+  // The share of the random pairs drawn as partial shortcuts, in [0, 1]: one part of the
+  // configuration (Space::Part, a translation or a rotation) moves straight from the first point
+  // to the second while the others keep their motion along the path, through the waypoints in
+  // between. A path that turns while it moves loses the turns' detours where no straight motion
+  // is free. Only in spaces with two parts or more.
+  double partial = 0;
   // Threads that check a batch of shortcuts at once (0 = all cores). The result does not depend
   // on it: the batches are fixed, only their checks run in parallel.
   int threads = 1;
@@ -57,8 +63,9 @@ struct ShortcutResult {
 };
 
 // Shortens the path: first drops waypoints whose neighbours connect, then tries seeded random
-// pairs of points (or, with corners_only, cuts every corner: a waypoint is replaced by the points
-// a fraction f = 1/2, 1/4, ..., 1/16 of each of its edges away, the largest f whose joining motion
+// pairs of points, a share of them partial shortcuts (ShortcutRequest::partial); or, with
+// corners_only, cuts every corner (a waypoint is replaced by the points a fraction
+// f = 1/2, 1/4, ..., 1/16 of each of its edges away, the largest f whose joining motion
 // is proven free). Keeps the endpoints; never lengthens the path. The checks run in parallel
 // batches: the waypoints to drop are checked together and non-neighbouring ones dropped, until
 // none is left to try; the random pairs are drawn kShortcutBatch at a time on the current path,

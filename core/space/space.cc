@@ -197,6 +197,17 @@ double Space::Distance(const Config& a, const Config& b) const {
   return d;
 }
 
+std::vector<Space::Part> Space::Parts() const {
+  std::vector<Part> parts;
+  for (int i = 0; i < num_components(); ++i) {
+    const int t = TranslationSize(components_[i]);
+    if (t > 0) parts.push_back(Part{.offset = offsets_[i], .size = t});
+    const int r = RotationOffset(components_[i].type);
+    if (r >= 0) parts.push_back(Part{.offset = offsets_[i] + r, .size = size(i) - r});
+  }
+  return parts;
+}
+
 Config Space::Interpolate(const Config& a, const Config& b, double t) const {
   if (t <= 0) return a;
   if (t >= 1) return b;

@@ -80,6 +80,16 @@ class Space {
   double TranslationDistance(int i, const Config& a, const Config& b) const;
   double RotationAngle(int i, const Config& a, const Config& b) const;
 
+  // A run of coordinates that moves on its own: a component's translation or its rotation.
+  struct Part {
+    int offset = 0;  // first coordinate
+    int size = 0;    // number of coordinates
+  };
+  // The parts of a configuration, in coordinate order. Distance is the sum of the parts'
+  // distances, so a motion that changes one part only costs that part's distance, and
+  // interpolating a part depends on that part alone.
+  std::vector<Part> Parts() const;
+
   // Throws InputError naming `field` if q has the wrong dimension, a NaN or infinite
   // coordinate, or a quaternion whose norm differs from 1 by more than 1e-3.
   void Validate(const Config& q, const std::string& field) const;

@@ -255,6 +255,8 @@ std::vector<Method> Methods(const Problem& p, bool inverse_clearance_pair, uint6
                                         .evaluation = Evaluation::kEager}));
   m.push_back(HgraphMethod("hgraph-lazy-all-pairs", "hgraph lazy all-pairs", {},
                            MergeOptions{.candidates = {.variant = Variant::kAllPairs}}));
+  m.push_back(HgraphMethod("hgraph-partial-shortcuts", "hgraph --partial-shortcuts", {},
+                           MergeOptions{.partial_shortcuts = true}));
   const double res = p.resolution;
   m.push_back(Method{.name = "ompl-hybridize-gaps+simplifymax",
                      .label = "OMPL hybridize (gaps) + simplifyMax",

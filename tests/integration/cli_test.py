@@ -540,6 +540,41 @@ def merge_server_same_lines_and_exit_codes(env):
 
 
 @case
+def merge_partial_shortcuts_on_a_mesh_scene(env):
+    """--partial-shortcuts on the rod through the holed wall (SE(3)): a certified path no longer
+    than the best input and other than the defaults' (the flag reaches the post-optimization),
+    the same lines with --server (it reaches the service); on the circles (R^2, one part) it
+    changes nothing."""
+    scene = str(env.data.parent / "bench" / "scenes" / "hole_wall" / "scene.json")
+    paths = str(env.data / "hole_wall" / "prm4_seed1.json")
+    results = {}
+    for extra in ((), ("--partial-shortcuts",)):
+        out = "partial.json" if extra else "plain.json"
+        proc = env.run("merge", "-q", "--scene", scene, "--paths", paths, "--out", out, *extra)
+        expect(proc.returncode == 0, "merge %s failed: exit %d" % (extra, proc.returncode))
+        results[extra] = json.loads((env.work / out).read_text())
+    plain, partial = results[()], results[("--partial-shortcuts",)]
+    best_input = min(i["quality"]["length"] for i in partial["inputs"] if i["valid"])
+    expect(partial["quality"]["length"] <= best_input, "longer than the best input")
+    expect(partial["path"]["waypoints"] != plain["path"]["waypoints"],
+           "--partial-shortcuts gave the defaults' path")
+    pathset = env.write("partial_path.json", {"paths": [
+        {"name": "merged", "waypoints": partial["path"]["waypoints"]}]})
+    proc = env.run("check", "--scene", scene, "--paths", pathset)
+    expect(proc.returncode == 0 and "certified" in proc.stdout,
+           "check does not certify the path: exit %d" % proc.returncode)
+    with env.server() as server:
+        local = env.run("merge", "-q", "--scene", scene, "--paths", paths, "--partial-shortcuts")
+        remote = env.run("merge", "-q", "--server", server.target, "--scene", scene, "--paths",
+                         paths, "--partial-shortcuts")
+        same_lines(local, remote, "merge --partial-shortcuts")
+    plain = env.run("merge", "-q", "--scene", env.scene, "--paths", env.paths)
+    partial = env.run("merge", "-q", "--scene", env.scene, "--paths", env.paths,
+                      "--partial-shortcuts")
+    same_lines(plain, partial, "merge --partial-shortcuts on R^2")
+
+
+@case
 def plan_server_same_lines_and_exit_codes(env):
     scene = circles_scene(env)
     with env.server() as server:

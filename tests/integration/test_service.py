@@ -134,6 +134,15 @@ def test_merge_streams_progress_then_requery_reuses_checks(client):
     assert client.get_session().hgraphs == [merged.hgraph]
 
 
+def test_partial_shortcuts_leave_a_space_of_one_part_alone(client):
+    """The circles' point robot moves in R^2 alone: no part to move on its own, so the option
+    reaches the server and changes nothing (the CLI's mesh case shows what it changes)."""
+    plain = client.merge(input_paths()).result
+    partial = client.merge(input_paths(), partial_shortcuts=True).result
+    assert partial.path == plain.path
+    assert partial.stats.collision_checks == plain.stats.collision_checks
+
+
 def test_requery_computes_missing_profiles_once(client):
     merged = client.merge(input_paths(), measure="length", variant="all-pairs",
                           evaluation="eager", optimize_ms=0)

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <random>
 
 #include "core/adapter/path_io.h"
@@ -224,11 +225,10 @@ TEST(MergeCertifiedTest, GrazingMotionsNeverReachTheOutput) {
   }
 }
 
-// Lazy inverse clearance on real meshes (the wrench among boxes; the rod through the holed wall,
-// mesh against mesh), where the ends' and probes' witnesses bound the unchecked edges: the same
-// H-Graph optimum as eager, for fewer distance queries. A ceiling below some clearance would
-// make lazy skip the optimum and return a costlier path.
-TEST(MergeMeshTest, LazyInverseClearanceFindsTheEagerOptimumOnMeshes) {
+// The mesh problems (the wrench among boxes; the rod through the holed wall, mesh against mesh)
+// with their four PRM inputs (hgraph-bench, seed 1): `test` runs on each, traced by scene.
+void ForMeshProblems(
+    const std::function<void(const LocalPlanner&, const std::vector<InputPath>&)>& test) {
   for (const auto& [scene_file, inputs_file] :
        {std::pair<std::string, std::string>{"/scenes/wrench/scene.json", "/wrench/prm4_seed1.json"},
         {"/tests/bench/scenes/hole_wall/scene.json", "/hole_wall/prm4_seed1.json"}}) {
@@ -239,6 +239,16 @@ TEST(MergeMeshTest, LazyInverseClearanceFindsTheEagerOptimumOnMeshes) {
     const std::vector<InputPath> inputs =
         LoadPathsFile(std::string(HGRAPH_TEST_DATA_DIR) + inputs_file, planner.space());
     ASSERT_EQ(inputs.size(), 4u);
+    test(planner, inputs);
+  }
+}
+
+// Lazy inverse clearance on the mesh problems, where the ends' and probes' witnesses bound the
+// unchecked edges: the same
+// H-Graph optimum as eager, for fewer distance queries. A ceiling below some clearance would
+// make lazy skip the optimum and return a costlier path.
+TEST(MergeMeshTest, LazyInverseClearanceFindsTheEagerOptimumOnMeshes) {
+  ForMeshProblems([](const LocalPlanner& planner, const std::vector<InputPath>& inputs) {
     std::vector<MergeResult> runs;
     for (Evaluation evaluation : {Evaluation::kLazy, Evaluation::kEager}) {
       runs.push_back(
@@ -252,7 +262,47 @@ TEST(MergeMeshTest, LazyInverseClearanceFindsTheEagerOptimumOnMeshes) {
     EXPECT_LT(lazy.stats.distance_queries, eager.stats.distance_queries);
     const InputReport check = CheckPaths(planner, {.paths = {lazy.path}}).paths.at(0);
     EXPECT_TRUE(check.valid && check.certified);
-  }
+  });
+}
+
+// Partial shortcuts (MergeOptions::partial_shortcuts) on real meshes (SE(3)), under length and
+// safe length: the merge keeps its invariants (certified, the endpoints, never worse than its
+// best input or its H-Graph optimum), and under length its result is another than without
+// them.
+TEST(MergeMeshTest, PartialShortcutsKeepTheInvariants) {
+  ForMeshProblems([](const LocalPlanner& planner, const std::vector<InputPath>& inputs) {
+    double safest_input = 0;
+    for (const InputReport& report : CheckPaths(planner, {.paths = inputs}).paths) {
+      if (report.valid) safest_input = std::max(safest_input, report.quality.min_clearance);
+    }
+    ASSERT_GT(safest_input, 0);
+    for (const MeasureSpec& measure :
+         {MeasureSpec{.type = MeasureType::kLength},
+          MeasureSpec{.type = MeasureType::kSafeLength, .safety = 0.5 * safest_input}}) {
+      SCOPED_TRACE(MeasureTypeName(measure.type));
+      std::vector<MergeResult> runs;
+      for (bool partial : {false, true}) {
+        runs.push_back(Merge(planner, MergeRequest{.paths = inputs,
+                                                   .measure = measure,
+                                                   .options = {.report_inputs = true,
+                                                               .partial_shortcuts = partial}}));
+      }
+      const MergeResult& r = runs[1];
+      const InputReport check = CheckPaths(planner, {.paths = {r.path}}).paths.at(0);
+      EXPECT_TRUE(check.valid && check.certified);
+      EXPECT_TRUE(r.path.waypoints.front().isApprox(inputs[0].waypoints.front()));
+      EXPECT_TRUE(r.path.waypoints.back().isApprox(inputs[0].waypoints.back()));
+      ASSERT_GE(r.best_input, 0);
+      EXPECT_LE(r.objective, r.best_input_objective + 1e-9);
+      EXPECT_LE(r.objective, r.hgraph_objective + 1e-9);
+      EXPECT_GT(r.stats.shortcuts, 0);
+      // Under length the shortcuts went elsewhere. (Under this safety both runs end at the same
+      // path on these inputs.)
+      if (measure.type == MeasureType::kLength) {
+        EXPECT_NE(r.path.waypoints, runs[0].path.waypoints);
+      }
+    }
+  });
 }
 
 TEST_F(MergeTest, RequeryReusesEveryCheck) {

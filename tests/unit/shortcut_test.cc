@@ -1,14 +1,18 @@
 // Certified partial shortcuts (core/merge/shortcut.h) on the OMPL circles scene: the result is
 // shorter, keeps the endpoints, is certified edge by edge, does not depend on the thread count,
-// and reuses the motions its caller already knows instead of checking them again.
+// and reuses the motions its caller already knows instead of checking them again. On the rod
+// through the holed wall (SE(3)): shortcuts that move one part of the configuration alone.
 #include "core/merge/shortcut.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <memory>
+#include <string>
 #include <vector>
 
+#include "core/adapter/path_io.h"
+#include "core/adapter/scene_proto.h"
 #include "core/collision/collision_world.h"
 #include "core/merge/path_check.h"
 #include "core/motion/local_planner.h"
@@ -19,6 +23,18 @@ namespace {
 
 using testing::CirclePaths;
 using testing::CirclesScene;
+
+// The path's own motions, certified (ShortcutRequest::edges); each must be valid.
+std::vector<EdgeReport> CertifiedEdges(const LocalPlanner& planner, const InputPath& path) {
+  std::vector<EdgeReport> edges;
+  for (size_t j = 0; j + 1 < path.waypoints.size(); ++j) {
+    edges.push_back(planner.CheckEdge({.from = &path.waypoints[j],
+                                       .to = &path.waypoints[j + 1],
+                                       .mode = EdgeCheckMode::kCertified}));
+    EXPECT_EQ(edges.back().state, EdgeState::kValid) << path.name << " edge " << j;
+  }
+  return edges;
+}
 
 class ShortcutTest : public ::testing::Test {
  protected:
@@ -79,12 +95,7 @@ TEST_F(ShortcutTest, CornerCutsReplaceCornersByCertifiedMotions) {
   ShortcutRequest request = Request();
   request.corners_only = true;
   // The input's own motions, certified: the pieces of them a cut leaves keep their verdict.
-  for (size_t j = 0; j + 1 < path_.waypoints.size(); ++j) {
-    request.edges.push_back(planner_.CheckEdge({.from = &path_.waypoints[j],
-                                                .to = &path_.waypoints[j + 1],
-                                                .mode = EdgeCheckMode::kCertified}));
-    ASSERT_EQ(request.edges.back().state, EdgeState::kValid);
-  }
+  request.edges = CertifiedEdges(planner_, path_);
   const ShortcutResult r = ShortcutCertified(planner_, request);
   const Space& space = planner_.space();
   ASSERT_GT(r.accepted, 0);
@@ -155,6 +166,76 @@ TEST_F(ShortcutTest, MotionsTheCallerKnowsAreNotCheckedAgain) {
   EXPECT_TRUE(none.id_checks.empty());
   EXPECT_LE(none.edges_checked, 1);
   EXPECT_LE(none.accepted, 1);
+}
+
+// Partial shortcuts on the rod through the holed wall (SE(3), mesh against mesh): a quarter of
+// the random pairs, or all of them, move one part (the translation or the rotation) straight
+// while the other keeps its motion. The result is shorter, keeps the endpoints, is certified,
+// and some of its new waypoints keep one part of an input waypoint exactly and not the other:
+// the interior points of a partial shortcut, which a straight shortcut never makes.
+TEST(ShortcutMeshTest, PartialShortcutsMoveOnePartAndAreCertified) {
+  const std::string scene =
+      std::string(HGRAPH_SOURCE_DIR) + "/tests/bench/scenes/hole_wall/scene.json";
+  const LocalPlanner planner(std::make_shared<CollisionWorld>(LoadSceneFile(scene)),
+                             {.resolution = SceneResolution(ReadSceneFile(scene))});
+  const Space& space = planner.space();
+  const std::vector<Space::Part> parts = space.Parts();
+  ASSERT_EQ(parts.size(), 2u);
+  const std::vector<InputPath> inputs =
+      LoadPathsFile(std::string(HGRAPH_TEST_DATA_DIR) + "/hole_wall/prm4_seed1.json", space);
+  ASSERT_FALSE(inputs.empty());
+  // Waypoints with one part of an input waypoint exactly, and the other part not.
+  const auto half_kept = [&](const ShortcutResult& r) {
+    int count = 0;
+    for (size_t j = 0; j < r.path.waypoints.size(); ++j) {
+      if (r.ids[j] >= 0) continue;
+      const Config& p = r.path.waypoints[j];
+      const bool one = std::any_of(inputs.begin(), inputs.end(), [&](const InputPath& input) {
+        return std::any_of(input.waypoints.begin(), input.waypoints.end(), [&](const Config& w) {
+          const auto same = [&](const Space::Part& part) {
+            return p.segment(part.offset, part.size) == w.segment(part.offset, part.size);
+          };
+          return same(parts[0]) != same(parts[1]);
+        });
+      });
+      count += one ? 1 : 0;
+    }
+    return count;
+  };
+  int plain_half_kept = 0;
+  int partial_half_kept = 0;
+  for (const InputPath& input : inputs) {
+    SCOPED_TRACE(input.name);
+    for (double partial : {0.0, 0.25, 1.0}) {
+      ShortcutRequest request{.path = input, .seed = 3, .partial = partial};
+      for (size_t j = 0; j < input.waypoints.size(); ++j) {
+        request.ids.push_back(static_cast<int>(j));
+      }
+      // The input's own motions, certified, for the edges that no shortcut replaces.
+      request.edges = CertifiedEdges(planner, input);
+      const ShortcutResult r = ShortcutCertified(planner, request);
+      double before = 0;
+      for (size_t j = 0; j + 1 < input.waypoints.size(); ++j) {
+        before += space.Distance(input.waypoints[j], input.waypoints[j + 1]);
+      }
+      double after = 0;
+      ASSERT_EQ(r.edges.size() + 1, r.path.waypoints.size());
+      for (size_t j = 0; j < r.edges.size(); ++j) {
+        EXPECT_EQ(r.edges[j].state, EdgeState::kValid) << "edge " << j;
+        EXPECT_NEAR(r.edges[j].length, space.Distance(r.path.waypoints[j], r.path.waypoints[j + 1]),
+                    1e-9);
+        after += r.edges[j].length;
+      }
+      EXPECT_LT(after, before);
+      EXPECT_TRUE(r.path.waypoints.front().isApprox(input.waypoints.front()));
+      EXPECT_TRUE(r.path.waypoints.back().isApprox(input.waypoints.back()));
+      const PathCheckResult check = CheckPaths(planner, PathCheckRequest{.paths = {r.path}});
+      EXPECT_TRUE(check.paths.at(0).valid && check.paths.at(0).certified) << "partial " << partial;
+      (partial == 0 ? plain_half_kept : partial_half_kept) += half_kept(r);
+    }
+  }
+  EXPECT_EQ(plain_half_kept, 0);
+  EXPECT_GT(partial_half_kept, 0);
 }
 
 }  // namespace

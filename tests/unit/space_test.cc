@@ -4,6 +4,9 @@
 
 #include <cmath>
 #include <numbers>
+#include <random>
+#include <utility>
+#include <vector>
 
 #include "core/common/error.h"
 
@@ -122,6 +125,52 @@ TEST(SpaceTest, SamplesStayInBoundsAndAreReproducible) {
     EXPECT_TRUE(space.InBounds(q));
     EXPECT_NEAR(q.tail<4>().norm(), 1.0, 1e-12);
     EXPECT_TRUE(q.isApprox(space.Sample(rng2)));
+  }
+}
+
+// The parts (a component's translation, its rotation) cover every coordinate once, and the
+// distance is the sum of what each part alone moves: a motion of one part costs that part only,
+// and interpolating the whole moves each part as interpolating it alone would.
+TEST(SpaceTest, PartsCoverTheCoordinatesAndTheirDistancesAddUp) {
+  const ComponentSpec se3{.type = ComponentType::kSE3,
+                          .lower = Eigen::Vector3d(-1, -1, -1),
+                          .upper = Eigen::Vector3d(1, 1, 1)};
+  const ComponentSpec se2{.type = ComponentType::kSE2,
+                          .lower = Eigen::Vector2d(0, 0),
+                          .upper = Eigen::Vector2d(2, 2),
+                          .translation_weight = 2.0};
+  const ComponentSpec rn{.type = ComponentType::kRealVector,
+                         .dimension = 3,
+                         .lower = Eigen::Vector3d(0, 0, 0),
+                         .upper = Eigen::Vector3d(1, 1, 1)};
+  const ComponentSpec so3{.type = ComponentType::kSO3};
+  for (const auto& [components, expected] :
+       std::vector<std::pair<std::vector<ComponentSpec>, std::vector<std::pair<int, int>>>>{
+           {{se3}, {{0, 3}, {3, 4}}},
+           {{se2}, {{0, 2}, {2, 1}}},
+           {{rn}, {{0, 3}}},
+           {{se2, rn, so3, se3}, {{0, 2}, {2, 1}, {3, 3}, {6, 4}, {10, 3}, {13, 4}}}}) {
+    const Space space(components);
+    std::vector<std::pair<int, int>> parts;
+    for (const Space::Part& part : space.Parts()) parts.emplace_back(part.offset, part.size);
+    EXPECT_EQ(parts, expected) << "components: " << components.size();
+    std::mt19937_64 rng(5);
+    for (int i = 0; i < 50; ++i) {
+      const Config a = space.Sample(rng);
+      const Config b = space.Sample(rng);
+      double sum = 0;
+      for (const Space::Part& part : space.Parts()) {
+        Config moved = a;
+        moved.segment(part.offset, part.size) = b.segment(part.offset, part.size);
+        sum += space.Distance(a, moved);
+        // Halfway along, the part is where interpolating it alone puts it.
+        Config half = space.Interpolate(a, moved, 0.5);
+        EXPECT_TRUE(half.segment(part.offset, part.size)
+                        .isApprox(space.Interpolate(a, b, 0.5).segment(part.offset, part.size)));
+      }
+      // acos near 1 costs sqrt(machine epsilon) where a part does not turn.
+      EXPECT_NEAR(sum, space.Distance(a, b), 1e-6);
+    }
   }
 }
 

@@ -375,6 +375,7 @@ class Client:
               max_node_spacing: Optional[float] = None,
               evaluation: Optional[str] = None, report_inputs: Optional[bool] = None,
               optimize_ms: Optional[float] = None,
+              partial_shortcuts: Optional[bool] = None,
               session: Optional[str] = None,
               on_progress: Optional[Callable[[Progress], None]] = None,
               progress_interval_ms: int = 0, seed: int = 0,
@@ -385,16 +386,18 @@ class Client:
         an input mid-edge (MergeOptions.max_node_spacing). `evaluation` is "lazy" (the default:
         only the edges the search wants are checked) or "eager"; `report_inputs` checks every
         input edge so that every input report is complete (InputReport.checked); `optimize_ms`
-        bounds the post-optimization (0 = off; unset = automatic)."""
+        bounds the post-optimization (0 = off; unset = automatic); `partial_shortcuts` lets a
+        quarter of its shortcuts move one part of the configuration alone (~1% shorter paths for
+        ~18% more checks)."""
         return self._recovering(lambda: self._merge(
             paths, measure=measure, k=k, safety=safety, variant=variant, options=options,
             max_node_spacing=max_node_spacing, evaluation=evaluation,
-            report_inputs=report_inputs, optimize_ms=optimize_ms, session=session,
-            on_progress=on_progress, progress_interval_ms=progress_interval_ms, seed=seed,
-            timeout=timeout), session)
+            report_inputs=report_inputs, optimize_ms=optimize_ms,
+            partial_shortcuts=partial_shortcuts, session=session, on_progress=on_progress,
+            progress_interval_ms=progress_interval_ms, seed=seed, timeout=timeout), session)
 
     def _merge(self, paths, *, measure, k, safety, variant, options, max_node_spacing,
-               evaluation, report_inputs, optimize_ms, session, on_progress,
+               evaluation, report_inputs, optimize_ms, partial_shortcuts, session, on_progress,
                progress_interval_ms, seed, timeout) -> MergeOutcome:
         opts = merge_pb2.MergeOptions()
         if options is not None:
@@ -409,6 +412,8 @@ class Client:
             opts.report_inputs = report_inputs
         if optimize_ms is not None:
             opts.optimize_ms = optimize_ms
+        if partial_shortcuts is not None:
+            opts.partial_shortcuts = partial_shortcuts
         request = service_pb2.MergePathsRequest(
             session=session or self.session or "", paths=make_paths(paths),
             measure=make_measure(measure, k, safety), options=opts, seed=seed,
