@@ -14,8 +14,10 @@
 
 namespace hgraph::server {
 
-// MergePaths: progress events at a bounded rate with at most one write in flight (a newer
-// report replaces an unsent one rather than queueing), then the result.
+// MergePaths: progress events at a bounded rate with at most one write in flight, then the
+// result. A report that comes while a write is in flight is dropped, unless it is one of the
+// post-optimization's (an objective, maybe a path: the best so far): that one waits, a newer one
+// replacing it, and goes out when the write is done.
 class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::MergePathsResponse> {
  public:
   MergeCall(PathMergerService* service, grpc::CallbackServerContext* context,
@@ -48,14 +50,23 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
 
   void OnWriteDone(bool ok) override {
     bool send_final = false;
+    bool send_waiting = false;
     {
       std::lock_guard lock(mutex_);
       writing_ = false;
-      if (final_pending_ && !final_sent_) send_final = final_sent_ = true;
+      if (final_pending_ && !final_sent_) {
+        send_final = final_sent_ = true;
+      } else if (ok && improvement_waiting_ && !final_pending_) {
+        // The result, when it comes, is at least as good: only then is a waiting one dropped.
+        progress_message_.Swap(&waiting_message_);
+        improvement_waiting_ = false;
+        send_waiting = writing_ = true;
+      }
     }
     // A failed write means the client has gone: stop the work.
     if (!ok) token_.Cancel();
     if (send_final) SendFinal();
+    if (send_waiting) StartWrite(&progress_message_);
   }
 
   void OnCancel() override { token_.Cancel(); }
@@ -146,30 +157,45 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
   // Called from engine worker threads.
   void OnProgress(const Progress& progress) {
     const Clock::time_point now = Clock::now();
+    // The first report goes out at once so that even a short merge shows progress, and so
+    // does each report of the post-optimization.
+    const bool improvement = !std::isnan(progress.objective);
     {
       std::lock_guard lock(mutex_);
-      if (writing_ || final_pending_) return;
-      // The first report goes out at once so that even a short merge shows progress, and so
-      // does each improvement of the post-optimization.
-      const bool improvement = !std::isnan(progress.objective);
-      if (sent_any_ && !improvement && now - last_sent_ < interval_) return;
+      if (final_pending_) return;
+      if (!writing_ && sent_any_ && !improvement && now - last_sent_ < interval_) return;
+      if (writing_) {
+        if (!improvement) return;
+        Fill(progress, now, &waiting_message_);
+        improvement_waiting_ = true;
+        return;
+      }
       writing_ = true;
       sent_any_ = true;
       last_sent_ = now;
-      v1::MergeProgress* p = progress_message_.mutable_progress();
-      p->set_phase(progress.phase);
-      p->set_done(progress.done);
-      p->set_total(progress.total);
-      p->set_collision_checks(progress.collision_checks);
-      p->set_distance_queries(progress.distance_queries);
-      p->set_elapsed_ms(std::chrono::duration<double, std::milli>(now - started_).count());
-      if (improvement) {
-        p->set_objective(progress.objective);
-      } else {
-        p->clear_objective();
-      }
+      Fill(progress, now, &progress_message_);
     }
     StartWrite(&progress_message_);
+  }
+
+  void Fill(const Progress& progress, Clock::time_point now, v1::MergePathsResponse* out) const {
+    v1::MergeProgress* p = out->mutable_progress();
+    p->set_phase(progress.phase);
+    p->set_done(progress.done);
+    p->set_total(progress.total);
+    p->set_collision_checks(progress.collision_checks);
+    p->set_distance_queries(progress.distance_queries);
+    p->set_elapsed_ms(std::chrono::duration<double, std::milli>(now - started_).count());
+    if (!std::isnan(progress.objective)) {
+      p->set_objective(progress.objective);
+    } else {
+      p->clear_objective();
+    }
+    if (progress.path) {
+      *p->mutable_path() = PathToProto(*progress.path);
+    } else {
+      p->clear_path();
+    }
   }
 
   void Complete(const grpc::Status& status, bool with_result) {
@@ -207,6 +233,9 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
   bool final_sent_ = false;
   Clock::time_point last_sent_;
   v1::MergePathsResponse progress_message_;
+  // A report of the post-optimization that came while a write was in flight.
+  v1::MergePathsResponse waiting_message_;
+  bool improvement_waiting_ = false;
   v1::MergePathsResponse final_;
   grpc::Status status_;
   bool with_result_ = false;

@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <map>
 #include <optional>
 #include <string>
@@ -173,7 +174,9 @@ int RunRemote(const MergeFlags& f, const RemoteOptions& remote) {
                         .total = p.total(),
                         .collision_checks = p.collision_checks(),
                         .distance_queries = p.distance_queries(),
-                        .elapsed_ms = p.elapsed_ms()});
+                        .elapsed_ms = p.elapsed_ms(),
+                        .objective = p.has_objective() ? p.objective()
+                                                       : std::numeric_limits<double>::quiet_NaN()});
     });
     return MergeRun{.result = std::move(*response.mutable_result()), .hgraph = response.hgraph()};
   };

@@ -128,6 +128,7 @@ MergeOptions MergeOptionsFromProto(const v1::MergeOptions& proto) {
   }
   options.report_inputs = proto.report_inputs();
   options.partial_shortcuts = proto.partial_shortcuts();
+  options.progress_paths = proto.progress_paths();
   if (proto.has_optimize_ms()) {
     limits::RequireRange(proto.optimize_ms(), 0, limits::kMaxOptimizeMs, "options.optimize_ms");
     options.optimize_ms = proto.optimize_ms();

@@ -16,6 +16,8 @@
 
 namespace hgraph {
 
+struct InputPath;  // core/path/path.h
+
 // Milliseconds of wall time since `start` (the per-phase timings of merges and checks).
 inline double MsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
@@ -61,9 +63,12 @@ struct Progress {
   int64_t collision_checks = 0;
   int64_t distance_queries = 0;
   double elapsed_ms = 0;
-  // Phase "optimize": the objective of the best path so far, after each improvement (NaN in
-  // every other phase).
+  // Phase "optimize": the objective of the best path so far, first the H-Graph optimum's (round
+  // 0), then after each improvement (NaN in every other phase).
   double objective = std::numeric_limits<double>::quiet_NaN();
+  // Phase "optimize", when asked for (MergeOptions::progress_paths): the path of `objective`,
+  // every motion of it proven free, so that a caller who stops the merge keeps the best so far.
+  std::shared_ptr<const InputPath> path;
 };
 
 // Called from worker threads, possibly concurrently; must be thread safe and cheap.

@@ -757,6 +757,19 @@ SearchResult HybridizationSession::SearchBest(const Measure& measure, EdgeNeed f
   }
 }
 
+std::vector<int> HybridizationSession::OutputNodes(const SearchResult& found) const {
+  std::vector<int> nodes;
+  for (int n : found.nodes) {
+    // An input that repeats a waypoint gives a zero-length edge; the output lists it once.
+    if (!nodes.empty() &&
+        checker_->space().Distance(graph_.node(nodes.back()).q, graph_.node(n).q) == 0) {
+      continue;
+    }
+    nodes.push_back(n);
+  }
+  return nodes;
+}
+
 SearchResult HybridizationSession::Optimize(const Measure& measure, SearchResult best,
                                             const ProgressCallback& progress,
                                             const CancelToken& cancel, MergeResult* result,
@@ -774,6 +787,25 @@ SearchResult HybridizationSession::Optimize(const Measure& measure, SearchResult
       build_stats_.radius > 0 ? build_stats_.radius : 2 * MeanInputEdgeLength(graph_, space);
   double objective = measure.Objective(EvaluateEdges(graph_, best.edges, measure.spec().k));
   SearchResult found = best;
+  // The best path so far: its objective, and with progress_paths the path (every path here is
+  // certified: the H-Graph's optimum, each round's search and each polish).
+  const auto stream = [&](int round) {
+    if (!progress) return;
+    std::shared_ptr<InputPath> path;
+    if (options_.progress_paths) {
+      path = std::make_shared<InputPath>(InputPath{.name = "merged"});
+      for (int n : OutputNodes(found)) path->waypoints.push_back(graph_.node(n).q);
+    }
+    progress(Progress{.phase = "optimize",
+                      .done = round,
+                      .total = 0,
+                      .collision_checks = 0,
+                      .distance_queries = 0,
+                      .elapsed_ms = MsSince(started),
+                      .objective = objective,
+                      .path = std::move(path)});
+  };
+  stream(0);
   // Rounds of random shortcuts, each re-hybridized, while they gain; then polishing rounds that
   // cut the corners of the path found (kPolishRounds at most, while they gain).
   // (Length only: under safe length a cut's pieces would need profiles of their own.)
@@ -849,8 +881,12 @@ SearchResult HybridizationSession::Optimize(const Measure& measure, SearchResult
           graph_.AddEdge(u, v, false);
         }
       }
-      // Certified, so that every objective streamed is that of a certified path.
-      next = SearchBest(measure, EdgeNeed::kCertificate, progress, cancel, result, rechecked);
+      // Certified, so that every objective streamed is that of a certified path; under a
+      // measure of clearance (safe length) also profiled, for the objective to be known: the
+      // search may take an edge whose clearance floor proves the safety without a profile.
+      next = SearchBest(measure,
+                        measure.needs_clearance() ? EdgeNeed::kClearance : EdgeNeed::kCertificate,
+                        progress, cancel, result, rechecked);
     }
     const double next_objective =
         measure.Objective(EvaluateEdges(graph_, next.edges, measure.spec().k));
@@ -858,15 +894,7 @@ SearchResult HybridizationSession::Optimize(const Measure& measure, SearchResult
     if (next_objective < objective) {
       found = std::move(next);
       objective = next_objective;
-      if (progress) {
-        progress(Progress{.phase = "optimize",
-                          .done = round,
-                          .total = 0,
-                          .collision_checks = 0,
-                          .distance_queries = 0,
-                          .elapsed_ms = MsSince(started),
-                          .objective = objective});
-      }
+      stream(round);
     }
     if (!improved) {
       if (!start_polish()) break;
@@ -921,13 +949,8 @@ MergeResult HybridizationSession::Query(const MeasureSpec& spec, const ProgressC
   }
   phase = Clock::now();
   result.quality = EvaluateEdges(graph_, best.edges, spec.k);
-  for (int n : best.nodes) {
+  for (int n : OutputNodes(best)) {
     const HNode& node = graph_.node(n);
-    // An input that repeats a waypoint gives a zero-length edge; the output lists it once.
-    if (!result.path.waypoints.empty() &&
-        checker_->space().Distance(result.path.waypoints.back(), node.q) == 0) {
-      continue;
-    }
     result.path.waypoints.push_back(node.q);
     result.source_path.push_back(node.path);
     result.source_index.push_back(node.index);

@@ -47,6 +47,9 @@ struct MergeOptions {
   // A quarter of the post-optimization's random shortcuts are partial (ShortcutRequest::partial):
   // shorter paths on average for more checks (see merge.proto MergeOptions.partial_shortcuts).
   bool partial_shortcuts = false;
+  // The post-optimization's progress events carry their path (Progress::path; see merge.proto
+  // MergeOptions.progress_paths).
+  bool progress_paths = false;
   double endpoint_tolerance = kEndpointTolerance;
   int threads = 0;  // worker threads; 0 = all cores
   // > 0: input edges longer than this are subdivided in the H-Graph (see HGraph); 0 = off.
@@ -207,6 +210,9 @@ class HybridizationSession {
   // The anytime post-optimization of `best` (MergeOptions.optimize_ms).
   SearchResult Optimize(const Measure& measure, SearchResult best, const ProgressCallback& progress,
                         const CancelToken& cancel, MergeResult* result, int64_t* rechecked);
+  // The nodes of a path found, as the output lists them: a node at the same configuration as
+  // the one before it (an input that repeats a waypoint) once.
+  std::vector<int> OutputNodes(const SearchResult& found) const;
 
   const MotionChecker* checker_;
   MergeOptions options_;

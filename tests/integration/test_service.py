@@ -143,6 +143,62 @@ def test_partial_shortcuts_leave_a_space_of_one_part_alone(client):
     assert partial.stats.collision_checks == plain.stats.collision_checks
 
 
+def test_progress_paths_stream_the_best_path_so_far(client):
+    """The post-optimization streams the best path's objective, and with progress_paths the
+    path itself: each one certified by the service's own check, from start to goal, of the
+    length its event names; the objectives only fall, and the result is no worse than the last.
+    Without progress_paths the events carry the objective alone."""
+    inputs = [[list(q.values) for q in p.waypoints] for p in input_paths().paths]
+    for with_paths in (True, False):
+        events = []
+        merged = client.merge(input_paths(), progress_paths=with_paths, on_progress=events.append)
+        optimize = [e for e in events if e.phase == "optimize"]
+        assert len(optimize) >= 2, events
+        assert all(e.objective is not None for e in optimize)
+        assert all(e.objective is None and e.path is None for e in events
+                   if e.phase != "optimize")
+        assert optimize[0].objective <= merged.result.hgraph_objective + 1e-9
+        assert all(b.objective < a.objective for a, b in zip(optimize, optimize[1:]))
+        assert merged.result.objective <= optimize[-1].objective + 1e-9
+        if not with_paths:
+            assert all(e.path is None for e in optimize)
+            continue
+        checked = client.check([e.path for e in optimize])
+        for event, report in zip(optimize, checked.paths):
+            assert report.valid and report.certified, report
+            assert report.quality.length == pytest.approx(event.objective, rel=1e-7)
+            assert list(event.path.waypoints[0].values) == pytest.approx(inputs[0][0])
+            assert list(event.path.waypoints[-1].values) == pytest.approx(inputs[0][-1])
+
+
+def test_stop_merge_keeps_the_best_path_so_far(client):
+    """A client that stops a merge on its first streamed path keeps that path (certified, of
+    its objective) as an incomplete outcome; stopped before any path came, it gets CANCELLED.
+    The server's worker is freed either way: the next merge completes."""
+    def stop_at_first_path(progress):
+        if progress.path is not None:
+            raise hgraph_client.StopMerge()
+
+    stopped = client.merge(input_paths(), progress_paths=True, on_progress=stop_at_first_path)
+    assert not stopped.complete and stopped.hgraph == ""
+    assert stopped.result.path.name == "merged" and len(stopped.result.path.waypoints) >= 2
+    report = client.check([stopped.result.path]).paths[0]
+    assert report.valid and report.certified
+    assert report.quality.length == pytest.approx(stopped.result.objective, rel=1e-7)
+    full = client.merge(input_paths())
+    assert full.complete
+    # The first path is the H-Graph's optimum or a later improvement; never better than the end.
+    assert full.result.objective <= stopped.result.objective + 1e-9
+
+    def stop_at_once(progress):
+        raise hgraph_client.StopMerge()
+
+    with pytest.raises(hgraph_client.HgraphError) as error:
+        client.merge(input_paths(), progress_paths=True, on_progress=stop_at_once)
+    assert error.value.code == grpc.StatusCode.CANCELLED
+    assert client.merge(input_paths()).complete
+
+
 def test_requery_computes_missing_profiles_once(client):
     merged = client.merge(input_paths(), measure="length", variant="all-pairs",
                           evaluation="eager", optimize_ms=0)

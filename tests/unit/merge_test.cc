@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <functional>
+#include <mutex>
 #include <random>
 
 #include "core/adapter/path_io.h"
@@ -305,6 +306,66 @@ TEST(MergeMeshTest, PartialShortcutsKeepTheInvariants) {
   });
 }
 
+// MergeOptions::progress_paths on the mesh problems, under length and safe length: every event
+// of the post-optimization carries its path, the best so far, which a caller who stops the merge
+// may take as it is: certified, keeping the safety, from start to goal, with the objective the
+// event names; the first is the H-Graph optimum, and the result is no worse than the last.
+TEST(MergeMeshTest, ProgressPathsAreCertifiedPathsOfTheirObjective) {
+  ForMeshProblems([](const LocalPlanner& planner, const std::vector<InputPath>& inputs) {
+    double safety = 0;
+    for (const InputReport& report : CheckPaths(planner, {.paths = inputs}).paths) {
+      if (report.valid) safety = std::max(safety, 0.5 * report.quality.min_clearance);
+    }
+    ASSERT_GT(safety, 0);
+    for (const MeasureSpec& measure :
+         {MeasureSpec{.type = MeasureType::kLength},
+          MeasureSpec{.type = MeasureType::kSafeLength, .safety = safety}}) {
+      SCOPED_TRACE(MeasureTypeName(measure.type));
+      std::mutex mu;
+      std::vector<Progress> events;
+      MergeRequest request{.paths = inputs,
+                           .measure = measure,
+                           .options = {.progress_paths = true},
+                           .progress = [&](const Progress& p) {
+                             std::lock_guard<std::mutex> lock(mu);
+                             if (p.phase == "optimize") {
+                               events.push_back(p);
+                             } else {
+                               EXPECT_EQ(p.path, nullptr) << p.phase;
+                             }
+                           }};
+      const MergeResult r = Merge(planner, request);
+      ASSERT_GE(events.size(), 2u);
+      EXPECT_EQ(events.front().done, 0);
+      EXPECT_DOUBLE_EQ(events.front().objective, r.hgraph_objective);
+      EXPECT_LE(r.objective, events.back().objective + 1e-9);
+      for (size_t i = 0; i < events.size(); ++i) {
+        SCOPED_TRACE("event " + std::to_string(i));
+        const Progress& e = events[i];
+        if (i > 0) {
+          EXPECT_GT(e.done, events[i - 1].done);
+          EXPECT_LT(e.objective, events[i - 1].objective);
+        }
+        ASSERT_NE(e.path, nullptr);
+        const InputPath& path = *e.path;
+        ASSERT_GE(path.waypoints.size(), 2u);
+        EXPECT_TRUE(path.waypoints.front().isApprox(inputs[0].waypoints.front()));
+        EXPECT_TRUE(path.waypoints.back().isApprox(inputs[0].waypoints.back()));
+        const InputReport check = CheckPaths(planner, {.paths = {path}}).paths.at(0);
+        EXPECT_TRUE(check.valid && check.certified);
+        EXPECT_NEAR(check.quality.length, e.objective, 1e-7 * e.objective);
+        if (measure.type == MeasureType::kSafeLength) {
+          EXPECT_GE(check.quality.min_clearance, safety);
+        }
+      }
+      // The last path streamed is the result's, or the result is better still.
+      if (r.objective >= events.back().objective - 1e-12) {
+        EXPECT_EQ(events.back().path->waypoints, r.path.waypoints);
+      }
+    }
+  });
+}
+
 TEST_F(MergeTest, RequeryReusesEveryCheck) {
   const LocalPlanner planner = MakePlanner();
   HybridizationSession session(
@@ -486,8 +547,10 @@ TEST_F(MergeTest, PostOptimizationShortensWithCertifiedMotionsAndStreamsEachImpr
   MergeRequest request{.paths = CirclePaths()};
   request.progress = [&](const Progress& p) {
     std::lock_guard<std::mutex> lock(mu);
+    EXPECT_EQ(p.path, nullptr) << "paths only with progress_paths";
     if (p.phase == "optimize") {
       EXPECT_FALSE(std::isnan(p.objective));
+      EXPECT_EQ(p.done == 0, improvements.empty()) << "round 0 first, and only then";
       improvements.push_back(p.objective);
     } else {
       EXPECT_TRUE(std::isnan(p.objective)) << p.phase;
@@ -504,7 +567,9 @@ TEST_F(MergeTest, PostOptimizationShortensWithCertifiedMotionsAndStreamsEachImpr
   // Circle paths leave room between the discs: shortcuts shorten the H-Graph optimum.
   EXPECT_LT(r.objective, r.hgraph_objective * (1 - 1e-3));
   EXPECT_GT(r.stats.shortcuts, 0);
-  ASSERT_FALSE(improvements.empty());
+  // The H-Graph optimum, then each improvement.
+  ASSERT_GE(improvements.size(), 2u);
+  EXPECT_DOUBLE_EQ(improvements.front(), r.hgraph_objective);
   for (size_t i = 1; i < improvements.size(); ++i) EXPECT_LT(improvements[i], improvements[i - 1]);
   EXPECT_LE(r.objective, improvements.back() + 1e-9);
   EXPECT_TRUE(r.path.waypoints.front().isApprox(CirclePaths()[0].waypoints.front()));

@@ -5,6 +5,8 @@
         scene = client.upload_scene("scenes/circles/scene.json")
         client.create_session(scene)
         merged = client.merge(paths, measure="length", on_progress=print)
+        # With a deadline: the best certified path streamed so far if the time runs out.
+        quick = client.merge(paths, timeout=0.5, best_so_far=True)  # quick.complete: finished
         again = client.requery(merged.hgraph, measure="inverse-clearance")
         checked = client.check(paths)  # each path as a merge checks its inputs
 
@@ -16,7 +18,7 @@ Every call carries the session's name in `x-hgraph-session` (session affinity be
 balancer); merge, check and plan recover from a lost replica with retries and backoff (Client).
 """
 from hgraph_client.client import (CheckOutcome, Client, HgraphError, MergeOutcome, Progress,
-                                  connect, load_paths_text, make_measure, make_paths)
+                                  StopMerge, connect, load_paths_text, make_measure, make_paths)
 
-__all__ = ["CheckOutcome", "Client", "HgraphError", "MergeOutcome", "Progress", "connect",
-           "load_paths_text", "make_measure", "make_paths"]
+__all__ = ["CheckOutcome", "Client", "HgraphError", "MergeOutcome", "Progress", "StopMerge",
+           "connect", "load_paths_text", "make_measure", "make_paths"]

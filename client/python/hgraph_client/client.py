@@ -59,6 +59,10 @@ class HgraphError(Exception):
         self.message = message
 
 
+class StopMerge(Exception):
+    """Raised by a merge's on_progress callback to end the call at once (Client.merge)."""
+
+
 @dataclasses.dataclass
 class Progress:
     phase: str
@@ -67,6 +71,10 @@ class Progress:
     collision_checks: int
     distance_queries: int
     elapsed_ms: float
+    # Phase "optimize": the best path's objective so far (round 0: the H-Graph's optimum), and
+    # with progress_paths the path itself (certified); None otherwise.
+    objective: Optional[float] = None
+    path: Optional[path_pb2.Path] = None
 
 
 @dataclasses.dataclass
@@ -75,6 +83,10 @@ class MergeOutcome:
     # "sessions/<id>/hgraphs/<n>": pass to Client.requery. Empty if the server could not keep it.
     hgraph: str
     progress_events: int
+    # False when the call stopped early (best_so_far and the deadline, or StopMerge) and `result`
+    # holds the best path streamed so far: its path, objective, measure and (when its event was
+    # received) hgraph_objective only, no report; the path is certified all the same.
+    complete: bool = True
 
 
 @dataclasses.dataclass
@@ -376,6 +388,7 @@ class Client:
               evaluation: Optional[str] = None, report_inputs: Optional[bool] = None,
               optimize_ms: Optional[float] = None,
               partial_shortcuts: Optional[bool] = None,
+              progress_paths: Optional[bool] = None, best_so_far: bool = False,
               session: Optional[str] = None,
               on_progress: Optional[Callable[[Progress], None]] = None,
               progress_interval_ms: int = 0, seed: int = 0,
@@ -388,17 +401,26 @@ class Client:
         input edge so that every input report is complete (InputReport.checked); `optimize_ms`
         bounds the post-optimization (0 = off; unset = automatic); `partial_shortcuts` lets a
         quarter of its shortcuts move one part of the configuration alone (~1% shorter paths for
-        ~18% more checks)."""
+        ~18% more checks).
+
+        The post-optimization streams the best path's objective (Progress.objective), and with
+        `progress_paths` the path itself (Progress.path, certified). `best_so_far` (which asks
+        for the paths) makes a call whose `timeout` passes after the first of them return that
+        best path (MergeOutcome.complete False) instead of raising DEADLINE_EXCEEDED. An
+        on_progress callback may raise StopMerge to end the call at once: the merge then returns
+        the best path streamed so far, or raises HgraphError(CANCELLED) if none came yet."""
         return self._recovering(lambda: self._merge(
             paths, measure=measure, k=k, safety=safety, variant=variant, options=options,
             max_node_spacing=max_node_spacing, evaluation=evaluation,
             report_inputs=report_inputs, optimize_ms=optimize_ms,
-            partial_shortcuts=partial_shortcuts, session=session, on_progress=on_progress,
+            partial_shortcuts=partial_shortcuts, progress_paths=progress_paths,
+            best_so_far=best_so_far, session=session, on_progress=on_progress,
             progress_interval_ms=progress_interval_ms, seed=seed, timeout=timeout), session)
 
     def _merge(self, paths, *, measure, k, safety, variant, options, max_node_spacing,
-               evaluation, report_inputs, optimize_ms, partial_shortcuts, session, on_progress,
-               progress_interval_ms, seed, timeout) -> MergeOutcome:
+               evaluation, report_inputs, optimize_ms, partial_shortcuts, progress_paths,
+               best_so_far, session, on_progress, progress_interval_ms, seed,
+               timeout) -> MergeOutcome:
         opts = merge_pb2.MergeOptions()
         if options is not None:
             opts.CopyFrom(options)
@@ -414,23 +436,49 @@ class Client:
             opts.optimize_ms = optimize_ms
         if partial_shortcuts is not None:
             opts.partial_shortcuts = partial_shortcuts
+        if progress_paths is not None:
+            opts.progress_paths = progress_paths
+        if best_so_far:
+            opts.progress_paths = True
         request = service_pb2.MergePathsRequest(
             session=session or self.session or "", paths=make_paths(paths),
             measure=make_measure(measure, k, safety), options=opts, seed=seed,
             progress_interval_ms=progress_interval_ms)
         events = 0
+        # The best path streamed so far, as a result of its own (path, objectives, measure).
+        best: Optional[merge_pb2.MergeResult] = None
+        call = self.stub.MergePaths(request, timeout=timeout,
+                                    metadata=self._metadata(request.session))
         try:
-            for event in self.stub.MergePaths(request, timeout=timeout,
-                                              metadata=self._metadata(request.session)):
+            for event in call:
                 if event.HasField("progress"):
                     events += 1
+                    p = event.progress
+                    objective = p.objective if p.HasField("objective") else None
+                    path = p.path if p.HasField("path") else None
+                    if path is not None:
+                        if best is None:
+                            best = merge_pb2.MergeResult(measure=request.measure)
+                        if p.done == 0:
+                            best.hgraph_objective = objective
+                        best.path.CopyFrom(path)
+                        best.objective = objective
                     if on_progress is not None:
-                        p = event.progress
                         on_progress(Progress(p.phase, p.done, p.total, p.collision_checks,
-                                             p.distance_queries, p.elapsed_ms))
+                                             p.distance_queries, p.elapsed_ms, objective, path))
                 elif event.HasField("result"):
                     return MergeOutcome(event.result, event.hgraph, events)
+        except StopMerge:
+            call.cancel()
+            if best is None:
+                raise HgraphError(grpc.StatusCode.CANCELLED,
+                                  "stopped by on_progress before a path was streamed "
+                                  "(progress_paths)") from None
+            return MergeOutcome(best, "", events, complete=False)
         except grpc.RpcError as e:
+            if (best_so_far and best is not None and
+                    e.code() == grpc.StatusCode.DEADLINE_EXCEEDED):
+                return MergeOutcome(best, "", events, complete=False)
             _raise(e)
         raise HgraphError(grpc.StatusCode.INTERNAL, "the stream ended without a result")
 
