@@ -43,6 +43,7 @@ struct MergeFlags {
   double optimize_ms = -1;
   bool report_inputs = false;
   bool partial_shortcuts = false;
+  bool best_so_far = false;
   int threads = 0;
   bool quiet = false;
   // Set when the flag was given; unset flags leave the proto field unset (core defaults).
@@ -113,6 +114,9 @@ v1::MergePathsRequest BuildRequest(const MergeFlags& f, const v1::Scene& scene,
 struct MergeRun {
   v1::MergeResult result;
   std::string hgraph;  // with --server: the stored H-Graph's name, for `hgraph requery`
+  // False: the deadline passed (--best-so-far) and `result` holds the best path streamed before
+  // it, with its objective and measure only.
+  bool complete = true;
 };
 
 // Runs the request; `scene` is loaded on demand (in process: always, for the merge itself).
@@ -134,12 +138,22 @@ int RunMerge(const MergeFlags& f, const MergeRunner& run, std::optional<LoadedSc
     if (!*loaded) loaded->emplace(LoadScene(scene_proto, f.scene, resolution));
     WriteTextFile(f.svg, RenderSvg(*(*loaded)->scene, MergePicture(paths, result)));
   }
+  if (!response.complete) {
+    std::printf(
+        "deadline passed during the post-optimization: the best path so far, certified, %zu "
+        "waypoints, %s objective %.6g (no report)\n",
+        result.path.waypoints.size(), MeasureTypeName(result.measure.type), result.objective);
+    return kExitOk;
+  }
   PrintMergeTable(result);
   if (!response.hgraph.empty()) std::printf("hgraph %s\n", response.hgraph.c_str());
   return kExitOk;
 }
 
 int RunLocal(const MergeFlags& f) {
+  if (f.best_so_far) {
+    throw InputError("--best-so-far", "needs --server and --timeout (the call's deadline)");
+  }
   const v1::Scene scene_proto = ReadSceneFile(f.scene);
   double resolution = 0;
   const Space space = SpaceFromProto(scene_proto.space(), "scene.space");
@@ -158,16 +172,31 @@ int RunLocal(const MergeFlags& f) {
 }
 
 int RunRemote(const MergeFlags& f, const RemoteOptions& remote) {
+  if (f.best_so_far && remote.timeout_s <= 0) {
+    throw InputError("--best-so-far", "needs --timeout (the call's deadline)");
+  }
   RemoteClient client(remote);
   const v1::Scene scene_proto = ReadSceneFile(f.scene);
   double resolution = 0;
   const Space space = SpaceFromProto(scene_proto.space(), "scene.space");
   const std::vector<InputPath> paths = LoadPathsFile(f.paths, space);
   v1::MergePathsRequest request = BuildRequest(f, scene_proto, paths, &resolution);
+  if (f.best_so_far) request.mutable_options()->set_progress_paths(true);
   v1::Scene uploaded;
   request.set_session(OpenSceneFile(client, f.scene, remote, &uploaded));
   const MergeRunner run = [&](const v1::MergePathsRequest& r, const ProgressCallback& progress) {
-    v1::MergePathsResponse response = client.Merge(r, [&](const v1::MergeProgress& p) {
+    // The best path streamed so far (--best-so-far), as a result of its own.
+    std::optional<v1::MergeResult> best;
+    const auto on_progress = [&](const v1::MergeProgress& p) {
+      if (p.has_path()) {
+        if (!best) {
+          best.emplace();
+          *best->mutable_measure() = r.measure();
+        }
+        *best->mutable_path() = p.path();
+        best->set_objective(p.objective());
+        if (p.done() == 0) best->set_hgraph_objective(p.objective());
+      }
       if (!progress) return;  // --quiet
       progress(Progress{.phase = p.phase(),
                         .done = p.done(),
@@ -177,8 +206,14 @@ int RunRemote(const MergeFlags& f, const RemoteOptions& remote) {
                         .elapsed_ms = p.elapsed_ms(),
                         .objective = p.has_objective() ? p.objective()
                                                        : std::numeric_limits<double>::quiet_NaN()});
-    });
-    return MergeRun{.result = std::move(*response.mutable_result()), .hgraph = response.hgraph()};
+    };
+    try {
+      v1::MergePathsResponse response = client.Merge(r, on_progress);
+      return MergeRun{.result = std::move(*response.mutable_result()), .hgraph = response.hgraph()};
+    } catch (const Error& e) {
+      if (!f.best_so_far || !best || e.code() != ErrorCode::kDeadlineExceeded) throw;
+      return MergeRun{.result = std::move(*best), .complete = false};
+    }
   };
   std::optional<LoadedScene> loaded;
   return RunMerge(f, run, &loaded, resolution, scene_proto, paths, request);
@@ -236,6 +271,10 @@ Subcommand AddMergeCommand(CLI::App& parent) {
   app->add_flag("--partial-shortcuts", f.partial_shortcuts,
                 "A quarter of the post-optimization's shortcuts move one part (a translation or "
                 "a rotation) alone: ~1% shorter paths for ~18% more checks");
+  app->add_flag("--best-so-far", f.best_so_far,
+                "With --server and --timeout: if the deadline passes during the "
+                "post-optimization, write the best path streamed so far (certified; --out then "
+                "holds its path and objective only) and exit 0");
   app->add_flag("--report-inputs", f.report_inputs,
                 "Check every input edge with its clearance, so every input is fully reported "
                 "(always so with --evaluation eager)");

@@ -575,6 +575,71 @@ def merge_partial_shortcuts_on_a_mesh_scene(env):
 
 
 @case
+def merge_best_so_far_keeps_the_last_streamed_path(env):
+    """--best-so-far: refused without --server and --timeout (exit 2 naming the flag); through
+    the server, deadlines from 5 ms up on the rod through the holed wall (the session reused, so
+    that only the merge runs under them). Whatever a deadline cuts, the outcome is one of three,
+    each checked: no path yet (exit 3, DEADLINE_EXCEEDED), the best path so far (exit 0; the
+    path `hgraph check` certifies, of the objective printed, from start to goal, no longer than
+    the H-Graph optimum), or the whole result (exit 0, its table)."""
+    scene = str(env.data.parent / "bench" / "scenes" / "hole_wall" / "scene.json")
+    paths = str(env.data / "hole_wall" / "prm4_seed1.json")
+    env.expect_bad_input(env.run("merge", "-q", "--scene", scene, "--paths", paths,
+                                 "--best-so-far"), "--best-so-far")
+    inputs = json.loads(pathlib.Path(paths).read_text())["paths"]
+    with env.server() as server:
+        env.expect_bad_input(env.run("merge", "-q", "--server", server.target, "--scene", scene,
+                                     "--paths", paths, "--best-so-far"), "--best-so-far")
+        full = env.run("merge", "-q", "--server", server.target, "--scene", scene, "--paths",
+                       paths, "--out", "full.json")
+        expect(full.returncode == 0, "merge failed: exit %d" % full.returncode)
+        session = re.search(r"^hgraph (sessions/[0-9a-f]+)/hgraphs/", full.stdout, re.M).group(1)
+        result = json.loads((env.work / "full.json").read_text())
+        outcomes = set()
+        for timeout in ("0.005", "0.01", "0.02", "0.04", "0.08", "0.16", "30"):
+            for name in ("bsf.json", "bsf_path.json"):
+                (env.work / name).unlink(missing_ok=True)
+            proc = env.run("merge", "-q", "--server", server.target, "--session", session,
+                           "--timeout", timeout, "--best-so-far", "--scene", scene, "--paths",
+                           paths, "--out", "bsf.json", "--out-path", "bsf_path.json")
+            if proc.returncode == 3:
+                expect("DEADLINE_EXCEEDED" in proc.stderr, "exit 3 without DEADLINE_EXCEEDED")
+                outcomes.add("none")
+                continue
+            expect(proc.returncode == 0, "exit %d at timeout %s" % (proc.returncode, timeout))
+            cut = re.search(r"the best path so far, certified, \d+ waypoints, length objective "
+                            r"([0-9.e+-]+)", proc.stdout)
+            if cut is None:
+                expect(re.search(r"^merged\s", proc.stdout, re.M), "neither a table nor a cut")
+                outcomes.add("complete")
+                continue
+            outcomes.add("cut")
+            partial = json.loads((env.work / "bsf.json").read_text())
+            objective = float(cut.group(1))
+            expect(abs(partial["objective"] - objective) <= 1e-5 * objective,
+                   "--out's objective is not the one printed")
+            expect(partial["objective"] <= result["hgraph_objective"] + 1e-9,
+                   "worse than the H-Graph optimum")
+            expect(partial["objective"] >= result["objective"] - 1e-9,
+                   "better than the whole merge's result")
+            waypoints = partial["path"]["waypoints"]
+            for end in (0, -1):
+                expect(close(waypoints[end]["values"], inputs[0]["waypoints"][end]["values"]),
+                       "the path does not keep the endpoints")
+            check = env.run("check", "--scene", scene, "--paths", "bsf_path.json")
+            expect(check.returncode == 0 and "certified" in check.stdout,
+                   "check does not certify the path: exit %d" % check.returncode)
+            length = float(re.search(r"length ([0-9.e+-]+)", check.stdout).group(1))
+            expect(abs(length - objective) <= 1e-5 * objective, "the path is not of its objective")
+        expect("complete" in outcomes, "no deadline let the merge finish: %s" % outcomes)
+
+
+def close(a, b, rel=1e-9):
+    """Two configurations equal within a relative tolerance."""
+    return len(a) == len(b) and all(abs(x - y) <= rel * max(1.0, abs(y)) for x, y in zip(a, b))
+
+
+@case
 def plan_server_same_lines_and_exit_codes(env):
     scene = circles_scene(env)
     with env.server() as server:
