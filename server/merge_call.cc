@@ -17,7 +17,7 @@ namespace hgraph::server {
 // MergePaths: progress events at a bounded rate with at most one write in flight, then the
 // result. A report that comes while a write is in flight is dropped, unless it is one of the
 // post-optimization's (an objective, maybe a path: the best so far): that one waits, a newer one
-// replacing it, and goes out when the write is done.
+// replacing it, and goes out when the write is done, before the result.
 class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::MergePathsResponse> {
  public:
   MergeCall(PathMergerService* service, grpc::CallbackServerContext* context,
@@ -54,13 +54,13 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
     {
       std::lock_guard lock(mutex_);
       writing_ = false;
-      if (final_pending_ && !final_sent_) {
-        send_final = final_sent_ = true;
-      } else if (ok && improvement_waiting_ && !final_pending_) {
-        // The result, when it comes, is at least as good: only then is a waiting one dropped.
+      if (ok && improvement_waiting_) {
+        // Before the result too: a client sees the last improvement whatever comes next.
         progress_message_.Swap(&waiting_message_);
         improvement_waiting_ = false;
         send_waiting = writing_ = true;
+      } else if (final_pending_ && !final_sent_) {
+        send_final = final_sent_ = true;
       }
     }
     // A failed write means the client has gone: stop the work.

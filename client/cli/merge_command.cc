@@ -41,6 +41,7 @@ struct MergeFlags {
   double max_node_spacing = 0;
   std::string evaluation = "lazy";
   double optimize_ms = -1;
+  int optimize_restarts = 0;
   bool report_inputs = false;
   bool partial_shortcuts = false;
   bool best_so_far = false;
@@ -55,6 +56,7 @@ struct MergeFlags {
   CLI::Option* endpoint_tolerance_opt = nullptr;
   CLI::Option* max_node_spacing_opt = nullptr;
   CLI::Option* optimize_ms_opt = nullptr;
+  CLI::Option* optimize_restarts_opt = nullptr;
 };
 
 // The proto fields each flag fills, so that errors name the flag as well.
@@ -71,6 +73,7 @@ const std::map<std::string, std::string>& FlagNames() {
       {"options.endpoint_tolerance", "--endpoint-tolerance"},
       {"options.max_node_spacing", "--max-node-spacing"},
       {"options.optimize_ms", "--optimize-ms"},
+      {"options.optimize_restarts", "--restarts"},
   };
   return names;
 }
@@ -100,6 +103,7 @@ v1::MergePathsRequest BuildRequest(const MergeFlags& f, const v1::Scene& scene,
     options->set_report_inputs(f.report_inputs);
     options->set_partial_shortcuts(f.partial_shortcuts);
     if (f.optimize_ms_opt->count() > 0) options->set_optimize_ms(f.optimize_ms);
+    if (f.optimize_restarts_opt->count() > 0) options->set_optimize_restarts(f.optimize_restarts);
     options->set_threads(f.threads);
     MeasureFromProto(request.measure());
     MergeOptionsFromProto(*options);
@@ -268,6 +272,11 @@ Subcommand AddMergeCommand(CLI::App& parent) {
       "--optimize-ms", f.optimize_ms,
       "Budget of the post-optimization (certified shortcuts re-hybridized, length and "
       "safe-length), ms; 0 = off (default: automatic, until a round gains < 0.1%, <= 2000 ms)");
+  f.optimize_restarts_opt = app->add_option(
+      "--restarts", f.optimize_restarts,
+      "Restarts of the post-optimization from the input paths once its rounds stop gaining, "
+      "each about one post-optimization (length, safe-length; default: none, or as many as an "
+      "explicit --optimize-ms allows)");
   app->add_flag("--partial-shortcuts", f.partial_shortcuts,
                 "A quarter of the post-optimization's shortcuts move one part (a translation or "
                 "a rotation) alone: ~1% shorter paths for ~18% more checks");

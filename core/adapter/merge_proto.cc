@@ -133,6 +133,14 @@ MergeOptions MergeOptionsFromProto(const v1::MergeOptions& proto) {
     limits::RequireRange(proto.optimize_ms(), 0, limits::kMaxOptimizeMs, "options.optimize_ms");
     options.optimize_ms = proto.optimize_ms();
   }
+  if (proto.has_optimize_restarts()) {
+    if (proto.optimize_restarts() < 0 || proto.optimize_restarts() > limits::kMaxOptimizeRestarts) {
+      throw InputError("options.optimize_restarts",
+                       "must be in [0, " + std::to_string(limits::kMaxOptimizeRestarts) +
+                           "], got " + std::to_string(proto.optimize_restarts()));
+    }
+    options.optimize_restarts = proto.optimize_restarts();
+  }
   return options;
 }
 

@@ -34,6 +34,8 @@ inline constexpr int kMaxProgressIntervalMs = 3600 * 1000;
 inline constexpr double kMaxPlanSeconds = 3600;
 // The anytime post-optimization's time budget.
 inline constexpr double kMaxOptimizeMs = 3600e3;
+// Its restarts from the input paths (each about one post-optimization).
+inline constexpr int kMaxOptimizeRestarts = 100000;
 // Nodes an H-Graph may have after subdividing edges (max_node_spacing).
 inline constexpr int kMaxNodes = 200000;
 

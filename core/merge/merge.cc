@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <mutex>
+#include <numeric>
 #include <utility>
 
 #include "core/common/client_text.h"
@@ -781,15 +782,17 @@ SearchResult HybridizationSession::Optimize(const Measure& measure, SearchResult
   }
   const Clock::time_point started = Clock::now();
   const double budget_ms = options_.optimize_ms > 0 ? options_.optimize_ms : kAutomaticOptimizeMs;
+  const bool within_budget_only = options_.optimize_restarts < 0;
   const Space& space = checker_->space();
   // Bridges from a shortcut's new points reach the nodes within the H-Graph's own scale.
   const double reach =
       build_stats_.radius > 0 ? build_stats_.radius : 2 * MeanInputEdgeLength(graph_, space);
   double objective = measure.Objective(EvaluateEdges(graph_, best.edges, measure.spec().k));
   SearchResult found = best;
+  int round = 0;
   // The best path so far: its objective, and with progress_paths the path (every path here is
   // certified: the H-Graph's optimum, each round's search and each polish).
-  const auto stream = [&](int round) {
+  const auto stream = [&] {
     if (!progress) return;
     std::shared_ptr<InputPath> path;
     if (options_.progress_paths) {
@@ -805,21 +808,49 @@ SearchResult HybridizationSession::Optimize(const Measure& measure, SearchResult
                       .objective = objective,
                       .path = std::move(path)});
   };
-  stream(0);
-  // Rounds of random shortcuts, each re-hybridized, while they gain; then polishing rounds that
-  // cut the corners of the path found (kPolishRounds at most, while they gain).
-  // (Length only: under safe length a cut's pieces would need profiles of their own.)
-  int polish_rounds = -1;  // -1 during the random rounds
-  // Whether the rounds go on after one that did not gain: only into the polish.
-  const auto start_polish = [&] {
-    if (polish_rounds >= 0 || type != MeasureType::kLength) return false;
-    polish_rounds = 0;
-    return true;
+  stream();
+  // Takes `next` if it is better; whether it gains at least kOptimizeMinGain.
+  const auto take = [&](SearchResult next) {
+    const double next_objective =
+        measure.Objective(EvaluateEdges(graph_, next.edges, measure.spec().k));
+    const bool improved = next_objective < objective * (1 - kOptimizeMinGain);
+    if (next_objective < objective) {
+      found = std::move(next);
+      objective = next_objective;
+      stream();
+    }
+    return improved;
   };
-  for (int round = 1; MsSince(started) < budget_ms; ++round) {
+  // The search over everything the H-Graph holds now: certified, so that every objective streamed
+  // is that of a certified path; under a measure of clearance (safe length) also profiled, for
+  // the objective to be known (the search may take an edge whose clearance floor proves the
+  // safety without a profile).
+  const auto search = [&] {
+    return SearchBest(measure,
+                      measure.needs_clearance() ? EdgeNeed::kClearance : EdgeNeed::kCertificate,
+                      progress, cancel, result, rechecked);
+  };
+  // A motion checked between two nodes joins the H-Graph with its report (an edge it already
+  // holds keeps its own report unless unchecked), so that no later round or search checks it
+  // again.
+  const auto keep = [&](int a, int b, const EdgeReport& report) {
+    if (a == b) return;
+    const int e = graph_.AddEdge(a, b, false);
+    if (graph_.edge(e).report.state == EdgeState::kUnchecked) {
+      graph_.mutable_edge(e).report = report;
+    }
+  };
+  // One round of shortcuts (or, polishing, of corner cuts) of a path whose waypoints are the
+  // nodes `ids`. What it checks joins the H-Graph; so does its path when it gained (new points as
+  // nodes, its edges with their reports, and unless polishing unchecked bridges from the new
+  // points to the nodes near them), whose node ids then replace `ids`.
+  const auto shorten = [&](const std::vector<int>& ids, const std::vector<EdgeReport>& edges,
+                           bool polishing) {
     cancel.ThrowIfStopped();
-    const bool polishing = polish_rounds >= 0;
+    ++round;
     ShortcutRequest request{.path = {.name = "shortcut"},
+                            .edges = edges,
+                            .ids = ids,
                             .seed = static_cast<uint64_t>(round),
                             .safety = type == MeasureType::kSafeLength ? measure.spec().safety : 0,
                             .corners_only = polishing,
@@ -829,78 +860,116 @@ SearchResult HybridizationSession::Optimize(const Measure& measure, SearchResult
                               const int e = graph_.FindEdge(a, b);
                               return e < 0 ? nullptr : &graph_.edge(e).report;
                             }};
-    for (int n : found.nodes) {
-      request.path.waypoints.push_back(graph_.node(n).q);
-      request.ids.push_back(n);
-    }
-    for (int e : found.edges) request.edges.push_back(graph_.edge(e).report);
-    const ShortcutResult shortcut = ShortcutCertified(*checker_, request, cancel);
+    for (int n : ids) request.path.waypoints.push_back(graph_.node(n).q);
+    ShortcutResult shortcut = ShortcutCertified(*checker_, request, cancel);
     *rechecked += shortcut.edges_checked;
     ++result->stats.optimize_rounds;
-    // A motion checked between two nodes joins the H-Graph with its report (an edge it already
-    // holds keeps its own report unless unchecked), so that no later round or search checks it
-    // again.
-    const auto keep = [&](int a, int b, const EdgeReport& report) {
-      if (a == b) return;
-      const int e = graph_.AddEdge(a, b, false);
-      if (graph_.edge(e).report.state == EdgeState::kUnchecked) {
-        graph_.mutable_edge(e).report = report;
-      }
-    };
     for (const auto& [a, b, report] : shortcut.id_checks) keep(a, b, report);
-    // A round that does not gain ends the random rounds (the polish starts) or the polish.
-    if (shortcut.accepted == 0) {
-      if (!start_polish()) break;
-      continue;
-    }
+    if (shortcut.accepted == 0) return shortcut;
     result->stats.shortcuts += shortcut.accepted;
-
-    // The shortcut path joins the H-Graph: its new points as nodes, its checked edges with their
-    // reports, unchecked bridges from the new points to the nodes near them.
-    std::vector<int> ids = shortcut.ids;
     std::vector<int> fresh;
-    for (size_t j = 0; j < ids.size(); ++j) {
-      if (ids[j] >= 0) continue;
-      ids[j] = graph_.AddNode(shortcut.path.waypoints[j]);
-      fresh.push_back(ids[j]);
+    for (size_t j = 0; j < shortcut.ids.size(); ++j) {
+      if (shortcut.ids[j] >= 0) continue;
+      shortcut.ids[j] = graph_.AddNode(shortcut.path.waypoints[j]);
+      fresh.push_back(shortcut.ids[j]);
     }
-    for (size_t j = 0; j + 1 < ids.size(); ++j) keep(ids[j], ids[j + 1], shortcut.edges[j]);
-    SearchResult next;
-    if (polishing) {
-      // The polished path itself: every edge proven free (the cuts) or a piece of one.
-      next.found = true;
-      for (size_t j = 0; j < ids.size(); ++j) {
-        if (!next.nodes.empty() && next.nodes.back() == ids[j]) continue;
-        if (!next.nodes.empty()) next.edges.push_back(graph_.FindEdge(next.nodes.back(), ids[j]));
-        next.nodes.push_back(ids[j]);
-      }
-    } else {
+    for (size_t j = 0; j + 1 < shortcut.ids.size(); ++j) {
+      keep(shortcut.ids[j], shortcut.ids[j + 1], shortcut.edges[j]);
+    }
+    if (!polishing) {
       for (int u : fresh) {
         for (int v = 0; v < graph_.num_nodes(); ++v) {
           if (v == u || space.Distance(graph_.node(u).q, graph_.node(v).q) > reach) continue;
           graph_.AddEdge(u, v, false);
         }
       }
-      // Certified, so that every objective streamed is that of a certified path; under a
-      // measure of clearance (safe length) also profiled, for the objective to be known: the
-      // search may take an edge whose clearance floor proves the safety without a profile.
-      next = SearchBest(measure,
-                        measure.needs_clearance() ? EdgeNeed::kClearance : EdgeNeed::kCertificate,
-                        progress, cancel, result, rechecked);
     }
-    const double next_objective =
-        measure.Objective(EvaluateEdges(graph_, next.edges, measure.spec().k));
-    const bool improved = next_objective < objective * (1 - kOptimizeMinGain);
-    if (next_objective < objective) {
-      found = std::move(next);
-      objective = next_objective;
-      stream(round);
+    return shortcut;
+  };
+
+  // Rounds of random shortcuts of the best path, each re-hybridized, while they gain; then
+  // polishing rounds that cut the corners of the path found (kPolishRounds at most, while they
+  // gain). (Length only: under safe length a cut's pieces would need profiles of their own.)
+  const bool polish = type == MeasureType::kLength;
+  for (int polish_rounds = -1; MsSince(started) < budget_ms;) {
+    const bool polishing = polish_rounds >= 0;
+    std::vector<EdgeReport> edges;
+    for (int e : found.edges) edges.push_back(graph_.edge(e).report);
+    const ShortcutResult shortcut = shorten(found.nodes, edges, polishing);
+    bool improved = false;
+    if (shortcut.accepted > 0) {
+      SearchResult next;
+      if (polishing) {
+        // The polished path itself: every edge proven free (the cuts) or a piece of one.
+        next.found = true;
+        for (int id : shortcut.ids) {
+          if (!next.nodes.empty() && next.nodes.back() == id) continue;
+          if (!next.nodes.empty()) next.edges.push_back(graph_.FindEdge(next.nodes.back(), id));
+          next.nodes.push_back(id);
+        }
+      } else {
+        next = search();
+      }
+      improved = take(std::move(next));
     }
+    // A round that does not gain ends the random rounds (the polish starts) or the polish.
     if (!improved) {
-      if (!start_polish()) break;
+      if (polishing || !polish) break;
+      polish_rounds = 0;
     } else if (polishing && ++polish_rounds == kPolishRounds) {
       break;
     }
+  }
+
+  // Restarts (MergeOptions::optimize_restarts): an input path, the shortest first and then each
+  // in turn, is shortened on its own (random rounds while they gain, then the polish, no search
+  // between), then the search runs over the H-Graph it has joined. Where the best path's
+  // shortcuts settle in one local optimum, an input may lead into a better one, and the search
+  // may take any mix of the two.
+  std::vector<int> order(graph_.num_paths());
+  std::iota(order.begin(), order.end(), 0);
+  std::vector<double> input_length(order.size());
+  for (int p : order) input_length[p] = PathLength(space, graph_.path(p));
+  std::stable_sort(order.begin(), order.end(),
+                   [&](int a, int b) { return input_length[a] < input_length[b]; });
+  for (int restart = 0;
+       !order.empty() && MsSince(started) < budget_ms &&
+       (within_budget_only ? options_.optimize_ms > 0 : restart < options_.optimize_restarts);
+       ++restart) {
+    std::vector<int> ids;
+    for (int n : graph_.path_nodes(order[restart % order.size()])) {
+      if (ids.empty() || ids.back() != n) ids.push_back(n);
+    }
+    // The input's edges as the shortcuts need them (their lengths); checked or not, the search
+    // decides on them.
+    std::vector<EdgeReport> edges;
+    double length = 0;
+    for (size_t j = 0; j + 1 < ids.size(); ++j) {
+      edges.push_back(
+          EdgeReport{.length = space.Distance(graph_.node(ids[j]).q, graph_.node(ids[j + 1]).q)});
+      length += edges.back().length;
+    }
+    for (int polish_rounds = -1; MsSince(started) < budget_ms;) {
+      const bool polishing = polish_rounds >= 0;
+      ShortcutResult shortcut = shorten(ids, edges, polishing);
+      bool gained = false;
+      if (shortcut.accepted > 0) {
+        double shortened = 0;
+        for (const EdgeReport& e : shortcut.edges) shortened += e.length;
+        gained = shortened < length * (1 - kOptimizeMinGain);
+        length = shortened;
+        ids = std::move(shortcut.ids);
+        edges = std::move(shortcut.edges);
+      }
+      if (!gained) {
+        if (polishing || !polish) break;
+        polish_rounds = 0;
+      } else if (polishing && ++polish_rounds == kPolishRounds) {
+        break;
+      }
+    }
+    cancel.ThrowIfStopped();
+    take(search());
   }
   result->timing.optimize_ms += MsSince(started);
   return found;

@@ -47,6 +47,10 @@ struct MergeOptions {
   // A quarter of the post-optimization's random shortcuts are partial (ShortcutRequest::partial):
   // shorter paths on average for more checks (see merge.proto MergeOptions.partial_shortcuts).
   bool partial_shortcuts = false;
+  // Restarts of the post-optimization from the input paths (see merge.proto
+  // MergeOptions.optimize_restarts): < 0 none with the automatic budget and as many as an
+  // explicit one allows, else this many (within the budget).
+  int optimize_restarts = -1;
   // The post-optimization's progress events carry their path (Progress::path; see merge.proto
   // MergeOptions.progress_paths).
   bool progress_paths = false;

@@ -257,6 +257,8 @@ std::vector<Method> Methods(const Problem& p, bool inverse_clearance_pair, uint6
                            MergeOptions{.candidates = {.variant = Variant::kAllPairs}}));
   m.push_back(HgraphMethod("hgraph-partial-shortcuts", "hgraph --partial-shortcuts", {},
                            MergeOptions{.partial_shortcuts = true}));
+  m.push_back(HgraphMethod("hgraph-restarts-2", "hgraph --restarts 2", {},
+                           MergeOptions{.optimize_restarts = 2}));
   const double res = p.resolution;
   m.push_back(Method{.name = "ompl-hybridize-gaps+simplifymax",
                      .label = "OMPL hybridize (gaps) + simplifyMax",

@@ -231,6 +231,8 @@ CASES = [
     ("node_spacing_tiny", "merge", merge_req(max_node_spacing=1e-9), C.INVALID_ARGUMENT, "options.max_node_spacing"),
     ("node_spacing_many_nodes", "merge", merge_req(max_node_spacing=0.0005), C.INVALID_ARGUMENT, "options.max_node_spacing"),
     ("optimize_ms_1e308", "merge", merge_req(optimize_ms=1e308), C.INVALID_ARGUMENT, "options.optimize_ms"),
+    ("optimize_restarts_negative", "merge", merge_req(optimize_restarts=-1), C.INVALID_ARGUMENT, "options.optimize_restarts"),
+    ("optimize_restarts_huge", "merge", merge_req(optimize_restarts=2000000000), C.INVALID_ARGUMENT, "options.optimize_restarts"),
     ("evaluation_unknown", "merge", merge_req(evaluation=9), C.INVALID_ARGUMENT, "options.evaluation"),
     ("progress_interval_negative", "merge", dict(progress_interval_ms=-5), C.INVALID_ARGUMENT, "progress_interval_ms"),
     # Measures.

@@ -312,6 +312,7 @@ def error_negative_parameters(env):
     env.merge_bad("measure.safety", "--measure", "safe-length", "--safety", "-0.5")
     env.merge_bad("options.resolution", "--resolution", "-0.01")
     env.merge_bad("options.resolution", "--resolution", "0")
+    env.merge_bad("--restarts", "--restarts", "-1")
     proc = env.run("check", "--scene", env.scene, "--paths", env.paths, "--resolution", "-1")
     env.expect_bad_input(proc, "resolution")
 

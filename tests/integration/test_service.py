@@ -153,7 +153,7 @@ def test_progress_paths_stream_the_best_path_so_far(client):
         events = []
         merged = client.merge(input_paths(), progress_paths=with_paths, on_progress=events.append)
         optimize = [e for e in events if e.phase == "optimize"]
-        # (One event may replace another that waited behind a write: at least one comes.)
+        # (One may replace another that waited behind a write; the last always comes.)
         assert optimize, events
         assert all(e.objective is not None for e in optimize)
         assert all(e.objective is None and e.path is None for e in events
@@ -170,6 +170,21 @@ def test_progress_paths_stream_the_best_path_so_far(client):
             assert report.quality.length == pytest.approx(event.objective, rel=1e-7)
             assert list(event.path.waypoints[0].values) == pytest.approx(inputs[0][0])
             assert list(event.path.waypoints[-1].values) == pytest.approx(inputs[0][-1])
+
+
+def test_restarts_reach_the_post_optimization(client):
+    """optimize_restarts through the service: more rounds, a path no longer than without them
+    and certified; a negative count is refused naming the field."""
+    plain = client.merge(input_paths()).result
+    restarted = client.merge(input_paths(), restarts=2).result
+    assert restarted.stats.optimize_rounds > plain.stats.optimize_rounds
+    assert restarted.objective <= plain.objective + 1e-9
+    report = client.check([restarted.path]).paths[0]
+    assert report.valid and report.certified
+    with pytest.raises(hgraph_client.HgraphError) as error:
+        client.merge(input_paths(), restarts=-1)
+    assert error.value.code == grpc.StatusCode.INVALID_ARGUMENT
+    assert "options.optimize_restarts" in error.value.message
 
 
 def test_stop_merge_keeps_the_best_path_so_far(client):

@@ -306,6 +306,49 @@ TEST(MergeMeshTest, PartialShortcutsKeepTheInvariants) {
   });
 }
 
+// Restarts (MergeOptions::optimize_restarts) on the mesh problems, with a budget that does not
+// bind: none gives the default merge's path; two keep the invariants (certified, the endpoints,
+// never worse than without them, under length and safe length) and give the same path on one
+// thread as on two (the count, not the machine, decides); on the rod through the holed wall
+// they lead out of the defaults' local optimum into a shorter one.
+TEST(MergeMeshTest, RestartsKeepTheInvariantsAndLeaveALocalOptimum) {
+  bool left_an_optimum = false;
+  ForMeshProblems([&](const LocalPlanner& planner, const std::vector<InputPath>& inputs) {
+    double safety = 0;
+    for (const InputReport& report : CheckPaths(planner, {.paths = inputs}).paths) {
+      if (report.valid) safety = std::max(safety, 0.5 * report.quality.min_clearance);
+    }
+    for (const MeasureSpec& measure :
+         {MeasureSpec{.type = MeasureType::kLength},
+          MeasureSpec{.type = MeasureType::kSafeLength, .safety = safety}}) {
+      SCOPED_TRACE(MeasureTypeName(measure.type));
+      const auto merge = [&](int restarts, int threads) {
+        return Merge(planner, MergeRequest{.paths = inputs,
+                                           .measure = measure,
+                                           .options = {.optimize_ms = 3600e3,
+                                                       .optimize_restarts = restarts,
+                                                       .threads = threads}});
+      };
+      const MergeResult plain = Merge(planner, MergeRequest{.paths = inputs, .measure = measure});
+      EXPECT_EQ(merge(0, 0).path.waypoints, plain.path.waypoints);
+      const MergeResult restarted = merge(2, 1);
+      const InputReport check = CheckPaths(planner, {.paths = {restarted.path}}).paths.at(0);
+      EXPECT_TRUE(check.valid && check.certified);
+      EXPECT_TRUE(restarted.path.waypoints.front().isApprox(inputs[0].waypoints.front()));
+      EXPECT_TRUE(restarted.path.waypoints.back().isApprox(inputs[0].waypoints.back()));
+      EXPECT_LE(restarted.objective, plain.objective + 1e-9);
+      EXPECT_GT(restarted.stats.optimize_rounds, plain.stats.optimize_rounds);
+      if (measure.type == MeasureType::kSafeLength) {
+        EXPECT_GE(check.quality.min_clearance, safety);
+      } else {
+        EXPECT_EQ(merge(2, 2).path.waypoints, restarted.path.waypoints);
+        left_an_optimum = left_an_optimum || restarted.objective < plain.objective * (1 - 1e-3);
+      }
+    }
+  });
+  EXPECT_TRUE(left_an_optimum);
+}
+
 // MergeOptions::progress_paths on the mesh problems, under length and safe length: every event
 // of the post-optimization carries its path, the best so far, which a caller who stops the merge
 // may take as it is: certified, keeping the safety, from start to goal, with the objective the
