@@ -782,7 +782,8 @@ SearchResult HybridizationSession::Optimize(const Measure& measure, SearchResult
   }
   const Clock::time_point started = Clock::now();
   const double budget_ms = options_.optimize_ms > 0 ? options_.optimize_ms : kAutomaticOptimizeMs;
-  const bool within_budget_only = options_.optimize_restarts < 0;
+  // Restarts until the budget runs out (an explicit one), or this many.
+  const bool restarts_by_budget = options_.optimize_restarts < 0;
   const Space& space = checker_->space();
   // Bridges from a shortcut's new points reach the nodes within the H-Graph's own scale.
   const double reach =
@@ -934,7 +935,7 @@ SearchResult HybridizationSession::Optimize(const Measure& measure, SearchResult
                    [&](int a, int b) { return input_length[a] < input_length[b]; });
   for (int restart = 0;
        !order.empty() && MsSince(started) < budget_ms &&
-       (within_budget_only ? options_.optimize_ms > 0 : restart < options_.optimize_restarts);
+       (restarts_by_budget ? options_.optimize_ms > 0 : restart < options_.optimize_restarts);
        ++restart) {
     std::vector<int> ids;
     for (int n : graph_.path_nodes(order[restart % order.size()])) {
