@@ -36,6 +36,11 @@ inline constexpr double kMaxPlanSeconds = 3600;
 inline constexpr double kMaxOptimizeMs = 3600e3;
 // Its restarts from the input paths (each about one post-optimization).
 inline constexpr int kMaxOptimizeRestarts = 100000;
+// What the post-optimization may add to an H-Graph (its shortcuts' points, and bridges from each
+// to the nodes near it, which restarts make dense: ~270 bytes an edge), so that a long budget
+// cannot exhaust the memory: it stops once it has added this many nodes or edges.
+inline constexpr int kMaxOptimizeNodes = 20000;
+inline constexpr int kMaxOptimizeEdges = 250000;
 // Nodes an H-Graph may have after subdividing edges (max_node_spacing).
 inline constexpr int kMaxNodes = 200000;
 

@@ -11,6 +11,7 @@
 
 #include "core/common/client_text.h"
 #include "core/common/error.h"
+#include "core/common/limits.h"
 #include "core/common/parallel.h"
 #include "core/merge/path_check.h"
 #include "core/merge/shortcut.h"
@@ -785,6 +786,15 @@ SearchResult HybridizationSession::Optimize(const Measure& measure, SearchResult
   // Restarts until the budget runs out (an explicit one), or this many.
   const bool restarts_by_budget = options_.optimize_restarts < 0;
   const Space& space = checker_->space();
+  // Whether the H-Graph may still grow (limits::kMaxOptimizeNodes, kMaxOptimizeEdges) and the
+  // budget lasts.
+  const int nodes_before = graph_.num_nodes();
+  const int edges_before = graph_.num_edges();
+  const auto go_on = [&] {
+    return MsSince(started) < budget_ms &&
+           graph_.num_nodes() - nodes_before < limits::kMaxOptimizeNodes &&
+           graph_.num_edges() - edges_before < limits::kMaxOptimizeEdges;
+  };
   // Bridges from a shortcut's new points reach the nodes within the H-Graph's own scale.
   const double reach =
       build_stats_.radius > 0 ? build_stats_.radius : 2 * MeanInputEdgeLength(graph_, space);
@@ -892,7 +902,7 @@ SearchResult HybridizationSession::Optimize(const Measure& measure, SearchResult
   // polishing rounds that cut the corners of the path found (kPolishRounds at most, while they
   // gain). (Length only: under safe length a cut's pieces would need profiles of their own.)
   const bool polish = type == MeasureType::kLength;
-  for (int polish_rounds = -1; MsSince(started) < budget_ms;) {
+  for (int polish_rounds = -1; go_on();) {
     const bool polishing = polish_rounds >= 0;
     std::vector<EdgeReport> edges;
     for (int e : found.edges) edges.push_back(graph_.edge(e).report);
@@ -934,7 +944,7 @@ SearchResult HybridizationSession::Optimize(const Measure& measure, SearchResult
   std::stable_sort(order.begin(), order.end(),
                    [&](int a, int b) { return input_length[a] < input_length[b]; });
   for (int restart = 0;
-       !order.empty() && MsSince(started) < budget_ms &&
+       !order.empty() && go_on() &&
        (restarts_by_budget ? options_.optimize_ms > 0 : restart < options_.optimize_restarts);
        ++restart) {
     std::vector<int> ids;
@@ -950,7 +960,7 @@ SearchResult HybridizationSession::Optimize(const Measure& measure, SearchResult
           EdgeReport{.length = space.Distance(graph_.node(ids[j]).q, graph_.node(ids[j + 1]).q)});
       length += edges.back().length;
     }
-    for (int polish_rounds = -1; MsSince(started) < budget_ms;) {
+    for (int polish_rounds = -1; go_on();) {
       const bool polishing = polish_rounds >= 0;
       ShortcutResult shortcut = shorten(ids, edges, polishing);
       bool gained = false;

@@ -14,6 +14,7 @@
 #include "core/adapter/scene_proto.h"
 #include "core/collision/collision_world.h"
 #include "core/common/error.h"
+#include "core/common/limits.h"
 #include "core/merge/path_check.h"
 #include "core/motion/local_planner.h"
 #include "tests/unit/test_scenes.h"
@@ -347,6 +348,36 @@ TEST(MergeMeshTest, RestartsKeepTheInvariantsAndLeaveALocalOptimum) {
     }
   });
   EXPECT_TRUE(left_an_optimum);
+}
+
+// A budget of an hour, spent on restarts that make the H-Graph dense (bridges from every new
+// point to the nodes near it), on the rod through the holed wall: the post-optimization stops
+// once it has added limits::kMaxOptimizeNodes nodes or kMaxOptimizeEdges edges (one round's
+// growth past them at most), long before the budget, with a certified path no worse than the
+// defaults'.
+TEST(MergeMeshTest, PostOptimizationGrowthIsBounded) {
+  const std::string scene =
+      std::string(HGRAPH_SOURCE_DIR) + "/tests/bench/scenes/hole_wall/scene.json";
+  const LocalPlanner planner(std::make_shared<CollisionWorld>(LoadSceneFile(scene)),
+                             {.resolution = SceneResolution(ReadSceneFile(scene))});
+  const std::vector<InputPath> inputs = LoadPathsFile(
+      std::string(HGRAPH_TEST_DATA_DIR) + "/hole_wall/prm4_seed1.json", planner.space());
+  const MergeResult plain = Merge(planner, MergeRequest{.paths = inputs});
+  HybridizationSession session(planner,
+                               MergeRequest{.paths = inputs, .options = {.optimize_ms = 3600e3}});
+  const int nodes = session.graph().num_nodes();
+  const int edges = session.graph().num_edges();
+  const MergeResult r = session.Query({});
+  EXPECT_LT(r.timing.optimize_ms, 3600e3);
+  const int added_nodes = session.graph().num_nodes() - nodes;
+  const int added_edges = session.graph().num_edges() - edges;
+  EXPECT_TRUE(added_nodes >= limits::kMaxOptimizeNodes || added_edges >= limits::kMaxOptimizeEdges)
+      << "the budget ran out first: " << added_nodes << " nodes, " << added_edges << " edges";
+  EXPECT_LT(added_nodes, 2 * limits::kMaxOptimizeNodes);
+  EXPECT_LT(added_edges, 2 * limits::kMaxOptimizeEdges);
+  const InputReport check = CheckPaths(planner, {.paths = {r.path}}).paths.at(0);
+  EXPECT_TRUE(check.valid && check.certified);
+  EXPECT_LE(r.objective, plain.objective + 1e-9);
 }
 
 // MergeOptions::progress_paths on the mesh problems, under length and safe length: every event
