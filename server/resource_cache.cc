@@ -84,6 +84,40 @@ void ResourceCache::EvictToFit(size_t keep, std::vector<std::pair<CacheKind, std
   }
 }
 
+bool ResourceCache::Resize(CacheKind kind, const std::string& key, size_t bytes) {
+  std::vector<std::pair<CacheKind, std::string>> evicted;
+  std::vector<std::shared_ptr<const void>> dropped;
+  EvictionListener listener;
+  bool held = false;
+  {
+    std::lock_guard lock(mutex_);
+    const auto it = index_.find(FullKey(kind, key));
+    if (it == index_.end()) return false;
+    const int k = static_cast<int>(kind);
+    bytes_ -= it->second->bytes;
+    kind_bytes_[k] -= it->second->bytes;
+    if (bytes > budget_bytes_) {
+      ++evictions_[k];
+      evicted.emplace_back(kind, key);
+      dropped.push_back(std::move(it->second->value));
+      lru_.erase(it->second);
+      index_.erase(it);
+    } else {
+      it->second->bytes = bytes;
+      bytes_ += bytes;
+      kind_bytes_[k] += bytes;
+      lru_.splice(lru_.begin(), lru_, it->second);
+      EvictToFit(1, &evicted, &dropped);
+      held = true;
+    }
+    listener = listener_;
+  }
+  if (listener) {
+    for (const auto& [victim_kind, victim_key] : evicted) listener(victim_kind, victim_key);
+  }
+  return held;
+}
+
 bool ResourceCache::Reserve(size_t bytes) {
   std::vector<std::pair<CacheKind, std::string>> evicted;
   std::vector<std::shared_ptr<const void>> dropped;

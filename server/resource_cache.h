@@ -48,6 +48,11 @@ class ResourceCache {
   // until the total is within the budget. Returns false, storing nothing, if `bytes` alone
   // exceeds the budget.
   bool Put(CacheKind kind, const std::string& key, std::shared_ptr<const void> value, size_t bytes);
+  // Counts an entry whose value grew or shrank (an H-Graph a query added to) at `bytes`, marks it
+  // most recently used and evicts others until the total fits; an entry now over the whole budget
+  // is evicted itself (the listener is told). Returns whether the entry is still held (false
+  // also when it was not: evicted meanwhile).
+  bool Resize(CacheKind kind, const std::string& key, size_t bytes);
   void Erase(CacheKind kind, const std::string& key);
 
   // Bytes held outside the cache that count against its budget (unfinished uploads): reserving

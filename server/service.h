@@ -109,6 +109,10 @@ class PathMergerService final : public v1::PathMerger::CallbackService {
   // session touched (NOT_FOUND / PERMISSION_DENIED as SessionRegistry::Touch), NOT_FOUND if the
   // cache no longer holds it.
   std::shared_ptr<StoredHGraph> HeldHGraph(const std::string& name, const std::string& tenant);
+  // Counts a stored H-Graph that a query or an addition grew at its size now
+  // (ResourceCache::Resize), so that the cache's budget bounds what the stored H-Graphs hold.
+  // Returns whether the cache still holds it.
+  bool Reaccount(const std::string& name, StoredHGraph& stored);
   void AddUpload(UploadCall* call);
   void RemoveUpload(UploadCall* call);
   void RecordMerge(const std::string& method, const v1::MergeResult& result);

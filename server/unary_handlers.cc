@@ -163,6 +163,18 @@ std::shared_ptr<PathMergerService::StoredHGraph> PathMergerService::HeldHGraph(
   return stored;
 }
 
+bool PathMergerService::Reaccount(const std::string& name, StoredHGraph& stored) {
+  size_t bytes = 0;
+  {
+    std::lock_guard lock(stored.mutex);
+    bytes = stored.session->memory_bytes();
+  }
+  if (cache_.Resize(CacheKind::kHGraph, name, bytes)) return true;
+  spdlog::warn("{} no longer held: {} bytes after the query (--cache-bytes)", ClientText(name),
+               bytes);
+  return false;
+}
+
 grpc::ServerUnaryReactor* PathMergerService::Requery(grpc::CallbackServerContext* context,
                                                      const v1::RequeryRequest* request,
                                                      v1::RequeryResponse* response) {
@@ -173,7 +185,7 @@ grpc::ServerUnaryReactor* PathMergerService::Requery(grpc::CallbackServerContext
         const MeasureSpec measure = MeasureFromProto(request->measure());
         const MergeResult result = QueryStored(*stored, measure, {}, token);
         *response->mutable_result() = MergeResultToProto(result);
-        response->set_hgraph(request->hgraph());
+        if (Reaccount(request->hgraph(), *stored)) response->set_hgraph(request->hgraph());
         RecordMerge("Requery", response->result());
       },
       /*on_worker=*/true);
@@ -214,7 +226,7 @@ grpc::ServerUnaryReactor* PathMergerService::AddPaths(grpc::CallbackServerContex
                       std::string(e.what()).substr(e.field().size() + 2));
         }
         *response->mutable_result() = MergeResultToProto(result);
-        response->set_hgraph(request->hgraph());
+        if (Reaccount(request->hgraph(), *stored)) response->set_hgraph(request->hgraph());
         response->set_candidates_added(added);
         RecordMerge("AddPaths", response->result());
       },

@@ -786,14 +786,18 @@ SearchResult HybridizationSession::Optimize(const Measure& measure, SearchResult
   // Restarts until the budget runs out (an explicit one), or this many.
   const bool restarts_by_budget = options_.optimize_restarts < 0;
   const Space& space = checker_->space();
-  // Whether the H-Graph may still grow (limits::kMaxOptimizeNodes, kMaxOptimizeEdges) and the
-  // budget lasts.
-  const int nodes_before = graph_.num_nodes();
-  const int edges_before = graph_.num_edges();
+  // Whether the budget lasts and the H-Graph may still grow: what the post-optimizations of all
+  // its queries added stays within limits::kMaxOptimizeNodes and kMaxOptimizeEdges.
+  const int nodes_before = graph_.num_nodes() - optimize_nodes_;
+  const int edges_before = graph_.num_edges() - optimize_edges_;
+  const auto count_growth = [&] {
+    optimize_nodes_ = graph_.num_nodes() - nodes_before;
+    optimize_edges_ = graph_.num_edges() - edges_before;
+  };
   const auto go_on = [&] {
-    return MsSince(started) < budget_ms &&
-           graph_.num_nodes() - nodes_before < limits::kMaxOptimizeNodes &&
-           graph_.num_edges() - edges_before < limits::kMaxOptimizeEdges;
+    count_growth();
+    return MsSince(started) < budget_ms && optimize_nodes_ < limits::kMaxOptimizeNodes &&
+           optimize_edges_ < limits::kMaxOptimizeEdges;
   };
   // Bridges from a shortcut's new points reach the nodes within the H-Graph's own scale.
   const double reach =
@@ -982,6 +986,7 @@ SearchResult HybridizationSession::Optimize(const Measure& measure, SearchResult
     cancel.ThrowIfStopped();
     take(search());
   }
+  count_growth();
   result->timing.optimize_ms += MsSince(started);
   return found;
 }

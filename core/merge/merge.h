@@ -224,6 +224,10 @@ class HybridizationSession {
   MergeStats build_stats_;
   MergeTiming build_timing_;
   bool first_query_ = true;
+  // Nodes and edges the post-optimizations of every query so far added (bounded by
+  // limits::kMaxOptimizeNodes and kMaxOptimizeEdges over the session's life).
+  int optimize_nodes_ = 0;
+  int optimize_edges_ = 0;
   std::vector<double> edge_length_;     // per edge: Space::Distance of its ends
   std::vector<double> motion_bound_;    // per edge: MotionChecker::MotionBound, NaN until needed
   std::vector<double> node_clearance_;  // per node: clearance, NaN until needed

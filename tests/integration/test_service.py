@@ -187,6 +187,18 @@ def test_restarts_reach_the_post_optimization(client):
     assert "options.optimize_restarts" in error.value.message
 
 
+def test_requery_counts_what_it_added_against_the_cache(server, client):
+    """A requery grows its stored H-Graph (here the post-optimization's points under length,
+    after a merge under inverse clearance that has none): the cache counts the H-Graph at its new
+    size, so that --cache-bytes bounds what stored H-Graphs hold."""
+    merged = client.merge(input_paths(), measure="inverse-clearance")
+    assert merged.result.stats.optimize_rounds == 0
+    before = server.metric("hgraph_cache_bytes", kind="hgraph")
+    again = client.requery(merged.hgraph, "length")
+    assert again.stats.optimize_rounds > 0
+    assert server.metric("hgraph_cache_bytes", kind="hgraph") > before
+
+
 def test_stop_merge_keeps_the_best_path_so_far(client):
     """A client that stops a merge on its first streamed path keeps that path (certified, of
     its objective) as an incomplete outcome; stopped before any path came, it gets CANCELLED.

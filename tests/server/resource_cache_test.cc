@@ -65,6 +65,35 @@ TEST(ResourceCache, ReplacingAKeyCountsItsBytesOnce) {
   EXPECT_EQ(cache.evictions(CacheKind::kWorld), 0);
 }
 
+// An entry that grew is counted at its new size, becomes the most recently used and makes the
+// least recently used others go; one that outgrew the whole budget goes itself, and the listener
+// hears of both; a key no longer held is not stored again.
+TEST(ResourceCache, ResizeCountsAGrownEntryAndEvictsToFit) {
+  ResourceCache cache(100);
+  std::vector<std::string> told;
+  cache.SetEvictionListener([&](CacheKind, const std::string& key) { told.push_back(key); });
+  ASSERT_TRUE(cache.Put(CacheKind::kHGraph, "h", Value("h"), 20));
+  ASSERT_TRUE(cache.Put(CacheKind::kBlob, "old", Value("old"), 30));
+  ASSERT_TRUE(cache.Put(CacheKind::kBlob, "new", Value("new"), 30));
+  EXPECT_TRUE(cache.Resize(CacheKind::kHGraph, "h", 40));
+  EXPECT_EQ(cache.bytes(), 100u);
+  EXPECT_EQ(cache.bytes(CacheKind::kHGraph), 40u);
+  EXPECT_TRUE(told.empty());
+  // "old" is now the least recently used ("h" moved up): growing "h" again evicts it.
+  EXPECT_TRUE(cache.Resize(CacheKind::kHGraph, "h", 65));
+  EXPECT_EQ(told, std::vector<std::string>{"old"});
+  EXPECT_TRUE(cache.Contains(CacheKind::kBlob, "new"));
+  EXPECT_EQ(cache.bytes(), 95u);
+  EXPECT_FALSE(cache.Resize(CacheKind::kHGraph, "h", 101));
+  EXPECT_FALSE(cache.Contains(CacheKind::kHGraph, "h"));
+  EXPECT_EQ((std::vector<std::string>{"old", "h"}), told);
+  EXPECT_EQ(cache.bytes(), 30u);
+  EXPECT_EQ(cache.evictions(CacheKind::kHGraph), 1);
+  EXPECT_FALSE(cache.Resize(CacheKind::kHGraph, "h", 10));
+  EXPECT_FALSE(cache.Contains(CacheKind::kHGraph, "h"));
+  EXPECT_EQ(cache.bytes(), 30u);
+}
+
 // A running call keeps what it looked up even after the entry is evicted.
 TEST(ResourceCache, EvictionNeverFreesAValueInUse) {
   ResourceCache cache(10);

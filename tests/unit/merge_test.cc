@@ -378,6 +378,14 @@ TEST(MergeMeshTest, PostOptimizationGrowthIsBounded) {
   const InputReport check = CheckPaths(planner, {.paths = {r.path}}).paths.at(0);
   EXPECT_TRUE(check.valid && check.certified);
   EXPECT_LE(r.objective, plain.objective + 1e-9);
+  // The bound holds over the session's life: a later query adds nothing more.
+  const int nodes_after = session.graph().num_nodes();
+  const int edges_after = session.graph().num_edges();
+  const MergeResult again = session.Query({});
+  EXPECT_EQ(again.stats.optimize_rounds, 0);
+  EXPECT_EQ(session.graph().num_nodes(), nodes_after);
+  EXPECT_EQ(session.graph().num_edges(), edges_after);
+  EXPECT_LE(again.objective, r.objective + 1e-9);
 }
 
 // MergeOptions::progress_paths on the mesh problems, under length and safe length: every event
