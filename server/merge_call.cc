@@ -163,13 +163,13 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
     {
       std::lock_guard lock(mutex_);
       if (final_pending_) return;
-      if (!writing_ && sent_any_ && !improvement && now - last_sent_ < interval_) return;
       if (writing_) {
         if (!improvement) return;
         Fill(progress, now, &waiting_message_);
         improvement_waiting_ = true;
         return;
       }
+      if (sent_any_ && !improvement && now - last_sent_ < interval_) return;
       writing_ = true;
       sent_any_ = true;
       last_sent_ = now;

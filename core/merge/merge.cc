@@ -902,39 +902,42 @@ SearchResult HybridizationSession::Optimize(const Measure& measure, SearchResult
     return shortcut;
   };
 
-  // Rounds of random shortcuts of the best path, each re-hybridized, while they gain; then
-  // polishing rounds that cut the corners of the path found (kPolishRounds at most, while they
-  // gain). (Length only: under safe length a cut's pieces would need profiles of their own.)
-  const bool polish = type == MeasureType::kLength;
-  for (int polish_rounds = -1; go_on();) {
-    const bool polishing = polish_rounds >= 0;
+  // Runs `one_round` (random shortcuts, or with `polishing` corner cuts; it returns whether it
+  // gained at least kOptimizeMinGain) while the rounds gain and go_on() allows: random rounds, then
+  // up to kPolishRounds polishing rounds (length only: under safe length a cut's pieces would need
+  // profiles of their own).
+  const auto run_rounds = [&](const auto& one_round) {
+    for (int polish_rounds = -1; go_on();) {
+      const bool polishing = polish_rounds >= 0;
+      if (!one_round(polishing)) {
+        if (polishing || type != MeasureType::kLength) return;
+        polish_rounds = 0;
+      } else if (polishing && ++polish_rounds == kPolishRounds) {
+        return;
+      }
+    }
+  };
+
+  // Rounds of the best path, each re-hybridized (a polished path is taken as it is).
+  run_rounds([&](bool polishing) {
     std::vector<EdgeReport> edges;
     for (int e : found.edges) edges.push_back(graph_.edge(e).report);
     const ShortcutResult shortcut = shorten(found.nodes, edges, polishing);
-    bool improved = false;
-    if (shortcut.accepted > 0) {
-      SearchResult next;
-      if (polishing) {
-        // The polished path itself: every edge proven free (the cuts) or a piece of one.
-        next.found = true;
-        for (int id : shortcut.ids) {
-          if (!next.nodes.empty() && next.nodes.back() == id) continue;
-          if (!next.nodes.empty()) next.edges.push_back(graph_.FindEdge(next.nodes.back(), id));
-          next.nodes.push_back(id);
-        }
-      } else {
-        next = search();
+    if (shortcut.accepted == 0) return false;
+    SearchResult next;
+    if (polishing) {
+      // The polished path itself: every edge proven free (the cuts) or a piece of one.
+      next.found = true;
+      for (int id : shortcut.ids) {
+        if (!next.nodes.empty() && next.nodes.back() == id) continue;
+        if (!next.nodes.empty()) next.edges.push_back(graph_.FindEdge(next.nodes.back(), id));
+        next.nodes.push_back(id);
       }
-      improved = take(std::move(next));
+    } else {
+      next = search();
     }
-    // A round that does not gain ends the random rounds (the polish starts) or the polish.
-    if (!improved) {
-      if (polishing || !polish) break;
-      polish_rounds = 0;
-    } else if (polishing && ++polish_rounds == kPolishRounds) {
-      break;
-    }
-  }
+    return take(std::move(next));
+  });
 
   // Restarts (MergeOptions::optimize_restarts): an input path, the shortest first and then each
   // in turn, is shortened on its own (random rounds while they gain, then the polish, no search
@@ -964,25 +967,17 @@ SearchResult HybridizationSession::Optimize(const Measure& measure, SearchResult
           EdgeReport{.length = space.Distance(graph_.node(ids[j]).q, graph_.node(ids[j + 1]).q)});
       length += edges.back().length;
     }
-    for (int polish_rounds = -1; go_on();) {
-      const bool polishing = polish_rounds >= 0;
+    run_rounds([&](bool polishing) {
       ShortcutResult shortcut = shorten(ids, edges, polishing);
-      bool gained = false;
-      if (shortcut.accepted > 0) {
-        double shortened = 0;
-        for (const EdgeReport& e : shortcut.edges) shortened += e.length;
-        gained = shortened < length * (1 - kOptimizeMinGain);
-        length = shortened;
-        ids = std::move(shortcut.ids);
-        edges = std::move(shortcut.edges);
-      }
-      if (!gained) {
-        if (polishing || !polish) break;
-        polish_rounds = 0;
-      } else if (polishing && ++polish_rounds == kPolishRounds) {
-        break;
-      }
-    }
+      if (shortcut.accepted == 0) return false;
+      double shortened = 0;
+      for (const EdgeReport& e : shortcut.edges) shortened += e.length;
+      const bool gained = shortened < length * (1 - kOptimizeMinGain);
+      length = shortened;
+      ids = std::move(shortcut.ids);
+      edges = std::move(shortcut.edges);
+      return gained;
+    });
     cancel.ThrowIfStopped();
     take(search());
   }

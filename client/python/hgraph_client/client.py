@@ -422,8 +422,7 @@ class Client:
 
     def _merge(self, paths, *, measure, k, safety, variant, options, max_node_spacing,
                evaluation, report_inputs, optimize_ms, restarts, partial_shortcuts,
-               progress_paths,
-               best_so_far, session, on_progress, progress_interval_ms, seed,
+               progress_paths, best_so_far, session, on_progress, progress_interval_ms, seed,
                timeout) -> MergeOutcome:
         opts = merge_pb2.MergeOptions()
         if options is not None:
