@@ -201,7 +201,13 @@ void PrintMergeTable(const MergeResult& r) {
     }
     PrintQualityRow(input.name + (input.checked ? "" : " *"), input.waypoints, input.valid, q);
   }
-  PrintQualityRow("merged", static_cast<int>(r.path.waypoints.size()), true, r.quality);
+  PathQuality merged = r.quality;
+  if (!merged.has_clearance) {
+    // Certified, not profiled (a length merge without --report-clearance).
+    merged.min_clearance = merged.avg_clearance = merged.inverse_clearance =
+        std::numeric_limits<double>::quiet_NaN();
+  }
+  PrintQualityRow("merged", static_cast<int>(r.path.waypoints.size()), true, merged);
   for (const InputReport& input : r.inputs) {
     if (!input.valid) {
       std::printf("  %s: edge %d invalid: %s\n", input.name.c_str(), input.invalid_edge,
@@ -212,6 +218,9 @@ void PrintMergeTable(const MergeResult& r) {
     std::printf(
         "  * not every edge checked (lazy evaluation): length only; --report-inputs "
         "checks them all\n");
+  }
+  if (!r.quality.has_clearance) {
+    std::printf("  merged: certified, clearance not profiled; --report-clearance profiles it\n");
   }
   std::printf("measure %s (%s variant): objective %s", MeasureTypeName(r.measure.type),
               VariantName(r.variant), Cell(r.objective, 0).c_str());

@@ -43,6 +43,7 @@ struct MergeFlags {
   double optimize_ms = -1;
   int optimize_restarts = 0;
   bool report_inputs = false;
+  bool report_clearance = false;
   bool partial_shortcuts = false;
   bool best_so_far = false;
   int threads = 0;
@@ -101,6 +102,7 @@ v1::MergePathsRequest BuildRequest(const MergeFlags& f, const v1::Scene& scene,
                                 ? v1::EVALUATION_EAGER
                                 : v1::EVALUATION_LAZY);
     options->set_report_inputs(f.report_inputs);
+    options->set_report_clearance(f.report_clearance);
     options->set_partial_shortcuts(f.partial_shortcuts);
     if (f.optimize_ms_opt->count() > 0) options->set_optimize_ms(f.optimize_ms);
     if (f.optimize_restarts_opt->count() > 0) options->set_optimize_restarts(f.optimize_restarts);
@@ -288,6 +290,10 @@ Subcommand AddMergeCommand(CLI::App& parent) {
   app->add_flag("--report-inputs", f.report_inputs,
                 "Check every input edge with its clearance, so every input is fully reported "
                 "(always so with --evaluation eager)");
+  app->add_flag("--report-clearance", f.report_clearance,
+                "Profile the merged path's clearance for the report under length (the clearance "
+                "measures always do); without it a length merge reports the certified path's "
+                "length only");
   app->add_option("--threads", f.threads, "Worker threads (0 = all cores)")->capture_default_str();
   app->add_flag("-q,--quiet", f.quiet, "No progress on stderr");
   return Subcommand{

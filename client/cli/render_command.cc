@@ -46,9 +46,8 @@ int RunRender(const RenderFlags& f, PathChecker checker) {
     ReadJsonFile(f.result, &result);
     v1::PathSet merged;
     *merged.add_paths() = result.path();
-    // A merge reports clearance for its output and for every valid input.
     RenderPath out{.path = PathsFromProto(merged).front(),
-                   .quality = QualityFromProto(result.quality(), true)};
+                   .quality = QualityFromProto(result.quality())};
     out.path.name = "merged";
     request.merged = std::move(out);
     // Reports follow the order of the merge's inputs; match by name so that a paths file in
@@ -61,7 +60,7 @@ int RunRender(const RenderFlags& f, PathChecker checker) {
       if (it == reports.end()) continue;
       reported[i] = true;
       if (it->second->valid()) {
-        input.quality = QualityFromProto(it->second->quality(), true);
+        input.quality = QualityFromProto(it->second->quality());
       } else {
         input.path.name += " (invalid)";
       }

@@ -127,6 +127,7 @@ MergeOptions MergeOptionsFromProto(const v1::MergeOptions& proto) {
                        "unknown evaluation " + std::to_string(proto.evaluation()));
   }
   options.report_inputs = proto.report_inputs();
+  options.report_clearance = proto.report_clearance();
   options.partial_shortcuts = proto.partial_shortcuts();
   options.progress_paths = proto.progress_paths();
   if (proto.has_optimize_ms()) {
@@ -160,16 +161,17 @@ v1::PathQuality QualityToProto(const PathQuality& quality) {
   proto.set_avg_clearance(quality.avg_clearance);
   proto.set_inverse_clearance(quality.inverse_clearance);
   proto.set_k(quality.k);
+  proto.set_has_clearance(quality.has_clearance);
   return proto;
 }
 
-PathQuality QualityFromProto(const v1::PathQuality& proto, bool has_clearance) {
+PathQuality QualityFromProto(const v1::PathQuality& proto) {
   return PathQuality{.length = proto.length(),
                      .min_clearance = proto.min_clearance(),
                      .avg_clearance = proto.avg_clearance(),
                      .inverse_clearance = proto.inverse_clearance(),
                      .k = proto.k(),
-                     .has_clearance = has_clearance};
+                     .has_clearance = proto.has_clearance()};
 }
 
 v1::InputReport InputReportToProto(const InputReport& report) {
@@ -198,8 +200,7 @@ InputReport InputReportFromProto(const v1::InputReport& proto) {
                      .valid = proto.valid(),
                      .invalid_edge = proto.invalid_edge(),
                      .invalid_reason = proto.invalid_reason(),
-                     .quality = QualityFromProto(
-                         proto.quality(), proto.valid() && proto.quality().min_clearance() > 0),
+                     .quality = QualityFromProto(proto.quality()),
                      .waypoints = proto.waypoints(),
                      .invalid_at = proto.invalid_at(),
                      .certified = proto.certified(),
@@ -267,7 +268,7 @@ MergeResult MergeResultFromProto(const v1::MergeResult& proto) {
   v1::PathSet one;
   *one.add_paths() = proto.path();
   result.path = PathsFromProto(one).front();
-  result.quality = QualityFromProto(proto.quality(), true);
+  result.quality = QualityFromProto(proto.quality());
   for (const v1::InputReport& input : proto.inputs()) {
     result.inputs.push_back(InputReportFromProto(input));
   }

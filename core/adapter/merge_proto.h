@@ -22,17 +22,11 @@ MergeOptions MergeOptionsFromProto(const v1::MergeOptions& proto);
 double ResolutionFromProto(const v1::MergeOptions& options, const v1::Scene& scene);
 
 v1::PathQuality QualityToProto(const PathQuality& quality);
-// The proto has no "has clearance" flag: the caller knows (a merge reports clearance for every
-// valid path; a sampled check for none).
-PathQuality QualityFromProto(const v1::PathQuality& proto, bool has_clearance);
+PathQuality QualityFromProto(const v1::PathQuality& proto);
 v1::InputReport InputReportToProto(const InputReport& report);
-// The clearance fields count as present when the path is valid with a positive minimum
-// clearance: a check with clearance never passes a sample of clearance 0, and one without
-// reports 0.
 InputReport InputReportFromProto(const v1::InputReport& proto);
 v1::MergeResult MergeResultToProto(const MergeResult& result);
-// The inverse, for clients of the service that draw or post-process a result. The merged path's
-// quality has clearance (a merge evaluates its output with clearance profiles).
+// The inverse, for clients of the service that draw or post-process a result.
 MergeResult MergeResultFromProto(const v1::MergeResult& proto);
 
 }  // namespace hgraph

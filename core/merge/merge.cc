@@ -248,6 +248,8 @@ void HybridizationSession::CheckEdges(const std::vector<int>& edge_ids, EdgeNeed
                                       const CancelToken& cancel, int64_t* checked) {
   const int64_t total = static_cast<int64_t>(edge_ids.size());
   if (total == 0) return;
+  // Edges the post-optimization added since the last search get their entries here too.
+  SyncEdgeData();
   const ThrottledProgress reporter(progress, phase, total, Clock::now());
   const int64_t checks_at_start = checker_->total_collision_checks();
   const int64_t queries_at_start = checker_->total_distance_queries();
@@ -1018,13 +1020,14 @@ MergeResult HybridizationSession::Query(const MeasureSpec& spec, const ProgressC
   result.timing.check_ms += MsSince(phase);
 
   // The optimum is certified first; the profiles, which only the report needs under a measure
-  // that does not search by clearance, are computed once, for the final path.
+  // that does not search by clearance, are computed for the final path when it asks for them
+  // (MergeOptions::report_clearance).
   SearchResult best =
       SearchBest(*measure, needs_clearance ? EdgeNeed::kClearance : EdgeNeed::kCertificate,
                  progress, cancel, &result, &rechecked);
   result.hgraph_objective = measure->Objective(EvaluateEdges(graph_, best.edges, spec.k));
   best = Optimize(*measure, std::move(best), progress, cancel, &result, &rechecked);
-  if (!needs_clearance) {
+  if (!needs_clearance && options_.report_clearance) {
     best = SearchBest(*measure, EdgeNeed::kClearance, progress, cancel, &result, &rechecked);
   }
   phase = Clock::now();

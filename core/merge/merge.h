@@ -41,6 +41,10 @@ struct MergeOptions {
   // (InputReport::checked). Always so with kEager. Lazy evaluation otherwise reports what its
   // search checked.
   bool report_inputs = false;
+  // Profile the merged path's clearance for its quality under a measure that needs none
+  // (length): see merge.proto MergeOptions.report_clearance. Off: the path is certified and its
+  // quality has its length only (PathQuality::has_clearance false).
+  bool report_clearance = false;
   // Anytime post-optimization budget in ms (see merge.proto MergeOptions.optimize_ms): < 0
   // automatic, 0 off.
   double optimize_ms = -1;

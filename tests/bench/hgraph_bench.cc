@@ -259,6 +259,8 @@ std::vector<Method> Methods(const Problem& p, bool inverse_clearance_pair, uint6
                            MergeOptions{.partial_shortcuts = true}));
   m.push_back(HgraphMethod("hgraph-restarts-2", "hgraph --restarts 2", {},
                            MergeOptions{.optimize_restarts = 2}));
+  m.push_back(HgraphMethod("hgraph-report-clearance", "hgraph --report-clearance", {},
+                           MergeOptions{.report_clearance = true}));
   const double res = p.resolution;
   m.push_back(Method{.name = "ompl-hybridize-gaps+simplifymax",
                      .label = "OMPL hybridize (gaps) + simplifyMax",
@@ -460,10 +462,11 @@ std::string Markdown(const std::vector<SceneResult>& scenes, const std::string& 
 // Two panels, one group of bars per scene: each length-method's length and time relative to the
 // best certified OMPL pipeline (1 = equal), on a log2 scale around 1.
 std::string Svg(const std::vector<SceneResult>& scenes) {
-  const std::vector<std::string> colors = {"#1f77b4", "#ff7f0e", "#2ca02c",
-                                           "#d62728", "#9467bd", "#8c564b"};
-  const int kMethods = 6;  // the length methods; the inverse-clearance pair is not compared
-  const double group_w = 150, bar_w = 20, left = 60, panel_h = 220, top = 40, legend_h = 130;
+  const std::vector<std::string> colors = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd",
+                                           "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22"};
+  // The length methods; the inverse-clearance pair is not compared.
+  const int kMethods = static_cast<int>(colors.size());
+  const double group_w = 200, bar_w = 20, left = 60, panel_h = 220, top = 40, legend_h = 190;
   const double width = left + group_w * scenes.size() + 20;
   const double height = top + 2 * (panel_h + 40) + legend_h;
   std::ostringstream o;

@@ -88,9 +88,39 @@ TEST_F(MergeTest, OmplCirclePathsMergeIntoAShorterValidPath) {
   ExpectValid(planner, r.path);
   EXPECT_TRUE(r.path.waypoints.front().isApprox(inputs[0].waypoints.front()));
   EXPECT_TRUE(r.path.waypoints.back().isApprox(inputs[0].waypoints.back()));
-  EXPECT_GT(r.quality.min_clearance, 0);
   EXPECT_GT(r.stats.collision_checks, 0);
   EXPECT_GT(r.stats.distance_queries, 0);
+}
+
+TEST_F(MergeTest, LengthMergeProfilesItsPathOnlyOnRequest) {
+  const LocalPlanner planner = MakePlanner();
+  const std::vector<InputPath> inputs = CirclePaths();
+  const MergeResult plain = Merge(planner, MergeRequest{.paths = inputs});
+  const MergeResult profiled =
+      Merge(planner, MergeRequest{.paths = inputs, .options = {.report_clearance = true}});
+  // The same certified path; only the report differs.
+  ASSERT_EQ(plain.path.waypoints.size(), profiled.path.waypoints.size());
+  for (size_t i = 0; i < plain.path.waypoints.size(); ++i) {
+    EXPECT_TRUE(plain.path.waypoints[i].isApprox(profiled.path.waypoints[i])) << i;
+  }
+  EXPECT_DOUBLE_EQ(plain.quality.length, profiled.quality.length);
+  const InputReport check = CheckPaths(planner, {.paths = {plain.path}}).paths.at(0);
+  ASSERT_TRUE(check.valid && check.certified);
+  EXPECT_FALSE(plain.quality.has_clearance);
+  EXPECT_EQ(plain.quality.min_clearance, 0);
+  EXPECT_EQ(plain.quality.avg_clearance, 0);
+  EXPECT_TRUE(profiled.quality.has_clearance);
+  EXPECT_GT(profiled.quality.min_clearance, 0);
+  // Both profiles sample the same motions; refinements may differ where they start from.
+  EXPECT_NEAR(profiled.quality.min_clearance, check.quality.min_clearance,
+              0.01 * check.quality.min_clearance);
+  EXPECT_LT(plain.stats.distance_queries, profiled.stats.distance_queries);
+  // A measure of clearance profiles its path without being asked.
+  const MergeResult widest =
+      Merge(planner,
+            MergeRequest{.paths = inputs, .measure = {.type = MeasureType::kBottleneckClearance}});
+  EXPECT_TRUE(widest.quality.has_clearance);
+  EXPECT_GT(widest.quality.min_clearance, 0);
 }
 
 struct Case {
@@ -151,8 +181,12 @@ TEST_P(MergePropertyTest, EveryVariantAndMeasureKeepsTheInvariants) {
         EXPECT_TRUE(check.valid && check.certified);
         EXPECT_TRUE(r.path.waypoints.front().isApprox(inputs[0].waypoints.front()));
         EXPECT_TRUE(r.path.waypoints.back().isApprox(inputs[0].waypoints.back()));
-        EXPECT_TRUE(r.quality.has_clearance);
-        EXPECT_GT(r.quality.min_clearance, 0);
+        // Under length the path is profiled only on request (MergeOptions::report_clearance).
+        EXPECT_EQ(r.quality.has_clearance, measure.type != MeasureType::kLength);
+        EXPECT_GT(check.quality.min_clearance, 0);
+        if (r.quality.has_clearance) {
+          EXPECT_GT(r.quality.min_clearance, 0);
+        }
         for (const InputReport& input : r.inputs) {
           if (input.valid && input.checked) {
             EXPECT_FALSE(Better(measure, input.quality, r.quality)) << input.name;
@@ -554,6 +588,39 @@ TEST_F(MergeTest, LazyRequeryProfilesOnlyWhatItsSearchWants) {
   EXPECT_LT(again.stats.edges_checked, lazy_bottleneck.stats.edges_checked);
   EXPECT_EQ(again.stats.node_clearances, 0);
   EXPECT_NEAR(again.objective, lazy_bottleneck.objective, 1e-12);
+}
+
+// The post-optimization adds nodes and edges to the H-Graph after the query's last search; an
+// eager requery then profiles every valid edge, those included (their per-edge data used to be
+// sized at the last search, and the requery read past it).
+TEST_F(MergeTest, EagerRequeryAfterPostOptimizationProfilesTheEdgesItAdded) {
+  const LocalPlanner planner = MakePlanner();
+  const std::vector<InputPath> inputs = CirclePaths();
+  double safest_input = 0;
+  for (const InputReport& report : CheckPaths(planner, {.paths = inputs}).paths) {
+    if (report.valid) safest_input = std::max(safest_input, report.quality.min_clearance);
+  }
+  ASSERT_GT(safest_input, 0);
+  for (const MeasureSpec& first :
+       {MeasureSpec{.type = MeasureType::kLength},
+        MeasureSpec{.type = MeasureType::kSafeLength, .safety = 0.5 * safest_input}}) {
+    SCOPED_TRACE(MeasureTypeName(first.type));
+    HybridizationSession session(
+        planner, MergeRequest{.paths = inputs,
+                              .options = {.candidates = {.variant = Variant::kAllPairs},
+                                          .evaluation = Evaluation::kEager}});
+    const int edges_before = session.graph().num_edges();
+    const MergeResult merged = session.Query(first);
+    ASSERT_GT(merged.stats.shortcuts, 0);
+    ASSERT_GT(session.graph().num_edges(), edges_before);
+    const MergeResult widest = session.Query({.type = MeasureType::kBottleneckClearance});
+    const InputReport check = CheckPaths(planner, {.paths = {widest.path}}).paths.at(0);
+    EXPECT_TRUE(check.valid && check.certified);
+    EXPECT_TRUE(widest.quality.has_clearance);
+    EXPECT_NEAR(widest.objective, -widest.quality.min_clearance, 1e-12);
+    EXPECT_GE(widest.quality.min_clearance,
+              merged.quality.has_clearance ? merged.quality.min_clearance - 1e-12 : 0.0);
+  }
 }
 
 TEST_F(MergeTest, InvalidInputEdgeIsReportedAndNotUsed) {

@@ -386,7 +386,7 @@ class Client:
               variant: Optional[str] = None, options: Optional[merge_pb2.MergeOptions] = None,
               max_node_spacing: Optional[float] = None,
               evaluation: Optional[str] = None, report_inputs: Optional[bool] = None,
-              optimize_ms: Optional[float] = None, restarts: Optional[int] = None,
+              report_clearance: Optional[bool] = None, optimize_ms: Optional[float] = None, restarts: Optional[int] = None,
               partial_shortcuts: Optional[bool] = None,
               progress_paths: Optional[bool] = None, best_so_far: bool = False,
               session: Optional[str] = None,
@@ -398,7 +398,9 @@ class Client:
         `max_node_spacing` subdivides long input edges in the H-Graph so that bridges can leave
         an input mid-edge (MergeOptions.max_node_spacing). `evaluation` is "lazy" (the default:
         only the edges the search wants are checked) or "eager"; `report_inputs` checks every
-        input edge so that every input report is complete (InputReport.checked); `optimize_ms`
+        input edge so that every input report is complete (InputReport.checked);
+        `report_clearance` profiles the merged path's clearance under length (otherwise its
+        quality has the length only, PathQuality.has_clearance False); `optimize_ms`
         bounds the post-optimization (0 = off; unset = automatic; a budget given is spent on
         restarts from the inputs once its rounds stop gaining); `restarts` sets how many
         (MergeOptions.optimize_restarts: each about one post-optimization, the same result on
@@ -415,15 +417,16 @@ class Client:
         return self._recovering(lambda: self._merge(
             paths, measure=measure, k=k, safety=safety, variant=variant, options=options,
             max_node_spacing=max_node_spacing, evaluation=evaluation,
-            report_inputs=report_inputs, optimize_ms=optimize_ms, restarts=restarts,
+            report_inputs=report_inputs, report_clearance=report_clearance,
+            optimize_ms=optimize_ms, restarts=restarts,
             partial_shortcuts=partial_shortcuts, progress_paths=progress_paths,
             best_so_far=best_so_far, session=session, on_progress=on_progress,
             progress_interval_ms=progress_interval_ms, seed=seed, timeout=timeout), session)
 
     def _merge(self, paths, *, measure, k, safety, variant, options, max_node_spacing,
-               evaluation, report_inputs, optimize_ms, restarts, partial_shortcuts,
-               progress_paths, best_so_far, session, on_progress, progress_interval_ms, seed,
-               timeout) -> MergeOutcome:
+               evaluation, report_inputs, report_clearance, optimize_ms, restarts,
+               partial_shortcuts, progress_paths, best_so_far, session, on_progress,
+               progress_interval_ms, seed, timeout) -> MergeOutcome:
         opts = merge_pb2.MergeOptions()
         if options is not None:
             opts.CopyFrom(options)
@@ -435,6 +438,8 @@ class Client:
             opts.evaluation = EVALUATIONS[evaluation]
         if report_inputs is not None:
             opts.report_inputs = report_inputs
+        if report_clearance is not None:
+            opts.report_clearance = report_clearance
         if optimize_ms is not None:
             opts.optimize_ms = optimize_ms
         if restarts is not None:
