@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # The demo: starts hgraph-server on a loopback port, plans three input paths with the paper's PRM
 # on the built-in grid scene through it, merges them for length (all-pairs on a subdivided
-# H-Graph) and writes a picture. Usage: scripts/demo.sh [BUILD_DIR] [OUT_DIR]
-# (defaults: build, a fresh temporary folder). From a fresh clone it first installs the missing
-# Debian packages and builds the server and the CLI. Exits non-zero if any step fails.
+# H-Graph; every path profiled so that the legend has its clearance) and writes a picture.
+# Usage: scripts/demo.sh [BUILD_DIR] [OUT_DIR] (defaults: build, a fresh temporary folder). From
+# a fresh clone it first installs the missing Debian packages and builds the server and the CLI.
+# Exits non-zero if any step fails.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${1:-$root/build}
@@ -31,7 +32,7 @@ echo "hgraph-server listening on 127.0.0.1:$port (log: $out/server.log)"
 "$build/hgraph" plan --server "127.0.0.1:$port" --scene "$scene" --planner prm --count 3 \
   --time 30 --seed 1 --out "$out/inputs.json"
 "$build/hgraph" merge --server "127.0.0.1:$port" --scene "$scene" --paths "$out/inputs.json" \
-  --variant all-pairs --max-node-spacing 0.5 --measure length \
+  --variant all-pairs --max-node-spacing 0.5 --measure length --report-inputs --report-clearance \
   --out "$out/result.json" --out-path "$out/merged.json" --svg "$out/grid.svg"
 "$build/hgraph" check --server "127.0.0.1:$port" --scene "$scene" --paths "$out/merged.json"
 echo "picture: $out/grid.svg (rsvg-convert $out/grid.svg -o grid.png)"
