@@ -441,6 +441,20 @@ def test_check_paths_reports_what_merge_reports(client):
     assert not any(p.certified for p in sampled.paths)
 
 
+def test_length_merge_reports_its_clearance_on_request(client):
+    plain = client.merge(input_paths()).result
+    profiled = client.merge(input_paths(), report_clearance=True).result
+    assert ([list(w.values) for w in plain.path.waypoints]
+            == [list(w.values) for w in profiled.path.waypoints])
+    assert not plain.quality.has_clearance
+    assert plain.quality.min_clearance == 0 and plain.quality.avg_clearance == 0
+    assert profiled.quality.has_clearance and profiled.quality.min_clearance > 0
+    assert plain.stats.distance_queries < profiled.stats.distance_queries
+    check = client.check([[list(w.values) for w in plain.path.waypoints]]).paths[0]
+    assert check.valid and check.certified and check.quality.has_clearance
+    assert check.quality.min_clearance == pytest.approx(profiled.quality.min_clearance, rel=0.01)
+
+
 def test_check_paths_errors_name_the_field(client):
     paths = [[list(q.values) for q in p.waypoints] for p in input_paths().paths]
     paths[1][3] = [float("nan"), 1.0]
