@@ -232,6 +232,9 @@ class HybridizationSession {
   // limits::kMaxOptimizeNodes and kMaxOptimizeEdges over the session's life).
   int optimize_nodes_ = 0;
   int optimize_edges_ = 0;
+  // The edges of the last query's result under a measure that needs no clearance (a length
+  // merge's path, certified but not profiled unless report_clearance).
+  std::vector<int> unprofiled_result_;
   std::vector<double> edge_length_;     // per edge: Space::Distance of its ends
   std::vector<double> motion_bound_;    // per edge: MotionChecker::MotionBound, NaN until needed
   std::vector<double> node_clearance_;  // per node: clearance, NaN until needed
