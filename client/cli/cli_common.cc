@@ -220,7 +220,8 @@ void PrintMergeTable(const MergeResult& r) {
         "checks them all\n");
   }
   if (!r.quality.has_clearance) {
-    std::printf("  merged: certified, clearance not profiled; --report-clearance profiles it\n");
+    std::printf(
+        "  merged: certified, clearance not profiled (merge --report-clearance profiles it)\n");
   }
   std::printf("measure %s (%s variant): objective %s", MeasureTypeName(r.measure.type),
               VariantName(r.variant), Cell(r.objective, 0).c_str());
