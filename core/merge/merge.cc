@@ -248,8 +248,6 @@ void HybridizationSession::CheckEdges(const std::vector<int>& edge_ids, EdgeNeed
                                       const CancelToken& cancel, int64_t* checked) {
   const int64_t total = static_cast<int64_t>(edge_ids.size());
   if (total == 0) return;
-  // Edges the post-optimization added since the last search get their entries here too.
-  SyncEdgeData();
   const ThrottledProgress reporter(progress, phase, total, Clock::now());
   const int64_t checks_at_start = checker_->total_collision_checks();
   const int64_t queries_at_start = checker_->total_distance_queries();
@@ -1004,6 +1002,9 @@ MergeResult HybridizationSession::Query(const MeasureSpec& spec, const ProgressC
   const int64_t checks_before = checker_->total_collision_checks();
   const int64_t queries_before = checker_->total_distance_queries();
   int64_t rechecked = 0;
+  // The previous query's post-optimization added nodes and edges after its last search: their
+  // per-edge data first, before anything here checks or probes them.
+  SyncEdgeData();
 
   Clock::time_point phase = Clock::now();
   if (options_.evaluation == Evaluation::kEager) {
@@ -1029,7 +1030,6 @@ MergeResult HybridizationSession::Query(const MeasureSpec& spec, const ProgressC
       if (report.state == EdgeState::kValid && !report.has_clearance) profile.push_back(e);
     }
     if (!profile.empty()) {
-      SyncEdgeData();
       ProbeProfileGrids(profile, cancel);
       CheckEdges(profile, EdgeNeed::kClearance, "clearance", progress, cancel, &rechecked);
     }

@@ -73,6 +73,16 @@ class MergeTest : public ::testing::Test {
   static std::shared_ptr<const CollisionWorld>* world_;
 };
 
+// The largest minimum clearance among the valid inputs (certified CheckPaths): half of it is a
+// safety some input keeps with room to spare, so that a safe-length merge must find a path.
+double SafestInputClearance(const LocalPlanner& planner, const std::vector<InputPath>& inputs) {
+  double safest = 0;
+  for (const InputReport& report : CheckPaths(planner, {.paths = inputs}).paths) {
+    if (report.valid) safest = std::max(safest, report.quality.min_clearance);
+  }
+  return safest;
+}
+
 std::shared_ptr<const CollisionWorld>* MergeTest::world_ = nullptr;
 
 TEST_F(MergeTest, OmplCirclePathsMergeIntoAShorterValidPath) {
@@ -135,10 +145,7 @@ TEST_P(MergePropertyTest, EveryVariantAndMeasureKeepsTheInvariants) {
   const std::vector<InputPath> inputs = PerturbedPaths(planner, GetParam(), 4);
   // A safety some input meets, so that every variant must find a safe path (the merge is never
   // worse than its best input), and one no configuration of the scene meets.
-  double safest_input = 0;
-  for (const InputReport& report : CheckPaths(planner, {.paths = inputs}).paths) {
-    if (report.valid) safest_input = std::max(safest_input, report.quality.min_clearance);
-  }
+  const double safest_input = SafestInputClearance(planner, inputs);
   ASSERT_GT(safest_input, 0);
   const std::vector<MeasureSpec> measures = {
       {.type = MeasureType::kLength},
@@ -307,10 +314,7 @@ TEST(MergeMeshTest, LazyInverseClearanceFindsTheEagerOptimumOnMeshes) {
 // them.
 TEST(MergeMeshTest, PartialShortcutsKeepTheInvariants) {
   ForMeshProblems([](const LocalPlanner& planner, const std::vector<InputPath>& inputs) {
-    double safest_input = 0;
-    for (const InputReport& report : CheckPaths(planner, {.paths = inputs}).paths) {
-      if (report.valid) safest_input = std::max(safest_input, report.quality.min_clearance);
-    }
+    const double safest_input = SafestInputClearance(planner, inputs);
     ASSERT_GT(safest_input, 0);
     for (const MeasureSpec& measure :
          {MeasureSpec{.type = MeasureType::kLength},
@@ -349,10 +353,7 @@ TEST(MergeMeshTest, PartialShortcutsKeepTheInvariants) {
 TEST(MergeMeshTest, RestartsKeepTheInvariantsAndLeaveALocalOptimum) {
   bool left_an_optimum = false;
   ForMeshProblems([&](const LocalPlanner& planner, const std::vector<InputPath>& inputs) {
-    double safety = 0;
-    for (const InputReport& report : CheckPaths(planner, {.paths = inputs}).paths) {
-      if (report.valid) safety = std::max(safety, 0.5 * report.quality.min_clearance);
-    }
+    const double safety = 0.5 * SafestInputClearance(planner, inputs);
     for (const MeasureSpec& measure :
          {MeasureSpec{.type = MeasureType::kLength},
           MeasureSpec{.type = MeasureType::kSafeLength, .safety = safety}}) {
@@ -428,10 +429,7 @@ TEST(MergeMeshTest, PostOptimizationGrowthIsBounded) {
 // event names; the first is the H-Graph optimum, and the result is no worse than the last.
 TEST(MergeMeshTest, ProgressPathsAreCertifiedPathsOfTheirObjective) {
   ForMeshProblems([](const LocalPlanner& planner, const std::vector<InputPath>& inputs) {
-    double safety = 0;
-    for (const InputReport& report : CheckPaths(planner, {.paths = inputs}).paths) {
-      if (report.valid) safety = std::max(safety, 0.5 * report.quality.min_clearance);
-    }
+    const double safety = 0.5 * SafestInputClearance(planner, inputs);
     ASSERT_GT(safety, 0);
     for (const MeasureSpec& measure :
          {MeasureSpec{.type = MeasureType::kLength},
@@ -596,10 +594,7 @@ TEST_F(MergeTest, LazyRequeryProfilesOnlyWhatItsSearchWants) {
 TEST_F(MergeTest, EagerRequeryAfterPostOptimizationProfilesTheEdgesItAdded) {
   const LocalPlanner planner = MakePlanner();
   const std::vector<InputPath> inputs = CirclePaths();
-  double safest_input = 0;
-  for (const InputReport& report : CheckPaths(planner, {.paths = inputs}).paths) {
-    if (report.valid) safest_input = std::max(safest_input, report.quality.min_clearance);
-  }
+  const double safest_input = SafestInputClearance(planner, inputs);
   ASSERT_GT(safest_input, 0);
   for (const MeasureSpec& first :
        {MeasureSpec{.type = MeasureType::kLength},
