@@ -74,7 +74,8 @@ void CheckBatchLimits(const v1::PathSet& paths, const ServerOptions& options) {
 }
 
 MergeResult QueryStored(PathMergerService::StoredHGraph& stored, const MeasureSpec& measure,
-                        const ProgressCallback& progress, const CancelToken& token) {
+                        const ProgressCallback& progress, const CancelToken& token,
+                        std::optional<bool> report_clearance) {
   std::unique_ptr<HybridizationSession> copy;
   uint64_t version = 0;
   {
@@ -82,7 +83,7 @@ MergeResult QueryStored(PathMergerService::StoredHGraph& stored, const MeasureSp
     copy = std::make_unique<HybridizationSession>(stored.session->Clone());
     version = stored.version;
   }
-  MergeResult result = copy->Query(measure, progress, token);
+  MergeResult result = copy->Query(measure, progress, token, report_clearance);
   {
     std::lock_guard lock(stored.mutex);
     if (stored.version == version) {
@@ -96,7 +97,8 @@ MergeResult QueryStored(PathMergerService::StoredHGraph& stored, const MeasureSp
 
 MergeResult AddToStored(PathMergerService::StoredHGraph& stored,
                         const std::vector<InputPath>& paths, const MeasureSpec& measure,
-                        const CancelToken& token, int64_t* candidates_added) {
+                        const CancelToken& token, int64_t* candidates_added,
+                        std::optional<bool> report_clearance) {
   std::lock_guard adding(stored.adding_mutex);
   std::unique_ptr<HybridizationSession> copy;
   {
@@ -104,7 +106,7 @@ MergeResult AddToStored(PathMergerService::StoredHGraph& stored,
     copy = std::make_unique<HybridizationSession>(stored.session->Clone());
   }
   *candidates_added = copy->AddPaths(paths, {}, token);
-  MergeResult result = copy->Query(measure, {}, token);
+  MergeResult result = copy->Query(measure, {}, token, report_clearance);
   {
     std::lock_guard lock(stored.mutex);
     std::swap(stored.session, copy);

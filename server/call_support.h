@@ -10,6 +10,7 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <optional>
 
 #include "core/common/error.h"
 #include "core/common/progress.h"
@@ -53,14 +54,24 @@ struct PathMergerService::StoredHGraph {
 // stored session if no other query did so meanwhile (else its checks are dropped; the answer
 // stands either way). The copy costs memory for the length of the query, not the H-Graph's
 // lock for every other caller.
+// `report_clearance`: HybridizationSession::Query's.
 MergeResult QueryStored(PathMergerService::StoredHGraph& stored, const MeasureSpec& measure,
-                        const ProgressCallback& progress, const CancelToken& token);
+                        const ProgressCallback& progress, const CancelToken& token,
+                        std::optional<bool> report_clearance = std::nullopt);
 
 // Adds paths to a stored H-Graph and searches it (AddPaths), on a copy as QueryStored does; the
 // copy replaces the stored session whatever queries did meanwhile (their checks are dropped,
 // the added paths never are). Returns the bridge candidates added through `candidates_added`.
+// A Requery's or AddPaths' report_clearance: this query's, if the request sets it.
+template <typename Request>
+std::optional<bool> ReportClearance(const Request& request) {
+  if (!request.has_report_clearance()) return std::nullopt;
+  return request.report_clearance();
+}
+
 MergeResult AddToStored(PathMergerService::StoredHGraph& stored,
                         const std::vector<InputPath>& paths, const MeasureSpec& measure,
-                        const CancelToken& token, int64_t* candidates_added);
+                        const CancelToken& token, int64_t* candidates_added,
+                        std::optional<bool> report_clearance = std::nullopt);
 
 }  // namespace hgraph::server

@@ -183,7 +183,8 @@ grpc::ServerUnaryReactor* PathMergerService::Requery(grpc::CallbackServerContext
       [=, this](const CancelToken& token) {
         const auto stored = HeldHGraph(request->hgraph(), call->tenant());
         const MeasureSpec measure = MeasureFromProto(request->measure());
-        const MergeResult result = QueryStored(*stored, measure, {}, token);
+        const MergeResult result =
+            QueryStored(*stored, measure, {}, token, ReportClearance(*request));
         *response->mutable_result() = MergeResultToProto(result);
         if (Reaccount(request->hgraph(), *stored)) response->set_hgraph(request->hgraph());
         RecordMerge("Requery", response->result());
@@ -218,7 +219,7 @@ grpc::ServerUnaryReactor* PathMergerService::AddPaths(grpc::CallbackServerContex
         int64_t added = 0;
         MergeResult result;
         try {
-          result = AddToStored(*stored, paths, measure, token, &added);
+          result = AddToStored(*stored, paths, measure, token, &added, ReportClearance(*request));
         } catch (const Error& e) {
           // The engine names the batch's own paths ("paths[i]..."), the request nests them.
           if (e.field() != "paths" && e.field().rfind("paths[", 0) != 0) throw;

@@ -21,12 +21,17 @@ struct StoredHGraphFlags {
   std::string hgraph;
   std::string out;
   MeasureFlags measure;
+  bool report_clearance = false;
 
   void Add(CLI::App* app) {
     app->add_option("--server", remote.server, "hgraph-server at HOST:PORT")->required();
     app->add_option("--hgraph", hgraph, "H-Graph name from a merge (sessions/<id>/hgraphs/<n>)")
         ->required();
     measure.Add(app);
+    app->add_flag(
+        "--report-clearance", report_clearance,
+        "Profile the path's clearance for the report under length, for this query (without "
+        "it: as the merge that built the H-Graph asked)");
     app->add_option("--out", out, "Write the MergeResult JSON here");
     app->add_option("--timeout", remote.timeout_s, "Deadline, seconds");
     AddConnectionFlags(app, &remote);
@@ -65,6 +70,7 @@ Subcommand AddRequeryCommand(CLI::App& parent) {
                       v1::RequeryRequest request;
                       request.set_hgraph(f->hgraph);
                       *request.mutable_measure() = f->Measure();
+                      if (f->report_clearance) request.set_report_clearance(true);
                       const v1::RequeryResponse response = client.Requery(request);
                       return f->Finish(response.result(), response.hgraph());
                     }};
@@ -97,6 +103,7 @@ Subcommand AddAddPathsCommand(CLI::App& parent) {
                       request.set_hgraph(f->hgraph);
                       *request.mutable_paths() = PathsToProto(added);
                       *request.mutable_measure() = f->Measure();
+                      if (f->report_clearance) request.set_report_clearance(true);
                       const v1::AddPathsResponse response = client.AddPaths(request);
                       return f->Finish(response.result(), response.hgraph());
                     }};

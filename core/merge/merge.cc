@@ -987,9 +987,11 @@ SearchResult HybridizationSession::Optimize(const Measure& measure, SearchResult
 }
 
 MergeResult HybridizationSession::Query(const MeasureSpec& spec, const ProgressCallback& progress,
-                                        const CancelToken& cancel) {
+                                        const CancelToken& cancel,
+                                        std::optional<bool> report_clearance) {
   const std::unique_ptr<const Measure> measure = Measure::Make(spec);
   const bool needs_clearance = measure->needs_clearance();
+  const bool profile_result = report_clearance.value_or(options_.report_clearance);
   const Clock::time_point started = Clock::now();
   MergeResult result;
   result.measure = spec;
@@ -1045,10 +1047,10 @@ MergeResult HybridizationSession::Query(const MeasureSpec& spec, const ProgressC
                  progress, cancel, &result, &rechecked);
   result.hgraph_objective = measure->Objective(EvaluateEdges(graph_, best.edges, spec.k));
   best = Optimize(*measure, std::move(best), progress, cancel, &result, &rechecked);
-  if (!needs_clearance && options_.report_clearance) {
+  if (!needs_clearance && profile_result) {
     best = SearchBest(*measure, EdgeNeed::kClearance, progress, cancel, &result, &rechecked);
   }
-  if (!needs_clearance && !options_.report_clearance) unprofiled_result_ = best.edges;
+  if (!needs_clearance && !profile_result) unprofiled_result_ = best.edges;
   phase = Clock::now();
   result.quality = EvaluateEdges(graph_, best.edges, spec.k);
   for (int n : OutputNodes(best)) {

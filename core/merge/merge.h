@@ -6,6 +6,7 @@
 
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -136,9 +137,12 @@ class HybridizationSession {
   HybridizationSession Clone() const { return HybridizationSession(*this); }
 
   // Searches under `measure`, computing clearance profiles only for valid edges that lack one.
-  // Throws InputError for a bad measure and Error(kFailedPrecondition) if no path satisfies it.
+  // `report_clearance` overrides MergeOptions::report_clearance for this query only (a requery
+  // under length that wants its path's clearance). Throws InputError for a bad measure and
+  // Error(kFailedPrecondition) if no path satisfies it.
   MergeResult Query(const MeasureSpec& measure, const ProgressCallback& progress = {},
-                    const CancelToken& cancel = {});
+                    const CancelToken& cancel = {},
+                    std::optional<bool> report_clearance = std::nullopt);
 
   // Adds input paths to the H-Graph (AddPaths): their nodes (subdivided as the first inputs),
   // their edges, and bridge candidates from every new node to every node added before it (its own

@@ -455,6 +455,28 @@ def test_length_merge_reports_its_clearance_on_request(client):
     assert check.quality.min_clearance == pytest.approx(profiled.quality.min_clearance, rel=0.01)
 
 
+def test_requery_reports_its_clearance_on_request(client):
+    """A requery (or AddPaths) under length profiles its path when it asks; the profiles stay."""
+    paths = [[list(q.values) for q in p.waypoints] for p in input_paths().paths]
+    merged = client.merge([paths[0]], optimize_ms=0)
+    assert not merged.result.quality.has_clearance
+    plain = client.requery(merged.hgraph, "length")
+    assert not plain.quality.has_clearance and plain.quality.min_clearance == 0
+    profiled = client.requery(merged.hgraph, "length", report_clearance=True)
+    assert profiled.quality.has_clearance and profiled.quality.min_clearance > 0
+    assert profiled.stats.distance_queries > 0
+    assert ([list(w.values) for w in plain.path.waypoints]
+            == [list(w.values) for w in profiled.path.waypoints])
+    check = client.check([[list(w.values) for w in profiled.path.waypoints]]).paths[0]
+    assert check.quality.min_clearance == pytest.approx(profiled.quality.min_clearance, rel=0.01)
+    # The H-Graph keeps them: the next query reports them without a distance query.
+    again = client.requery(merged.hgraph, "length")
+    assert again.quality.has_clearance and again.stats.distance_queries == 0
+    assert again.quality.min_clearance == profiled.quality.min_clearance
+    added = client.add_paths(merged.hgraph, [paths[1]], report_clearance=True).result
+    assert added.quality.has_clearance and added.quality.min_clearance > 0
+
+
 def test_check_paths_errors_name_the_field(client):
     paths = [[list(q.values) for q in p.waypoints] for p in input_paths().paths]
     paths[1][3] = [float("nan"), 1.0]

@@ -194,8 +194,8 @@ class Client:
     `tls_cert` and `tls_key` are the client certificate and its key for a server that requires
     mutual TLS (--tls-client-ca). `token` (default: $HGRAPH_TOKEN) goes with every call as
     `authorization: Bearer <token>` for a server with --auth-tokens; sessions then belong to the
-    token's tenant (token="" sends none, whatever the environment says). Over plaintext the token travels in the clear: use it with TLS (or on
-    loopback).
+    token's tenant (token="" sends none, whatever the environment says). Over plaintext the
+    token travels in the clear: use it with TLS (or on loopback).
     """
 
     def __init__(self, target: str, *, max_message_bytes: int = 64 << 20, retries: int = 4,
@@ -501,24 +501,31 @@ class Client:
 
     def requery(self, hgraph: str, measure: Union[str, merge_pb2.Measure] = "length", *,
                 k: Optional[float] = None, safety: Optional[float] = None,
+                report_clearance: Optional[bool] = None,
                 timeout: Optional[float] = None) -> merge_pb2.MergeResult:
-        """Searches a stored H-Graph under another measure, reusing its checked edges."""
+        """Searches a stored H-Graph under another measure, reusing its checked edges.
+
+        `report_clearance` profiles the path's clearance under length for this query (None: as
+        the merge that built the H-Graph asked)."""
         try:
             return self.stub.Requery(service_pb2.RequeryRequest(
-                hgraph=hgraph, measure=make_measure(measure, k, safety)), timeout=timeout,
+                hgraph=hgraph, measure=make_measure(measure, k, safety),
+                report_clearance=report_clearance), timeout=timeout,
                 metadata=self._metadata(hgraph.split("/hgraphs/", 1)[0])).result
         except grpc.RpcError as e:
             _raise(e)
 
     def add_paths(self, hgraph: str, paths, measure: Union[str, merge_pb2.Measure] = "length", *,
                   k: Optional[float] = None, safety: Optional[float] = None,
+                  report_clearance: Optional[bool] = None,
                   timeout: Optional[float] = None) -> service_pb2.AddPathsResponse:
         """Adds input paths to a stored H-Graph (edges checked before are kept), then searches
         it under `measure` (AddPaths). The response carries the result, the H-Graph's name and
-        the bridge candidates the new paths brought."""
+        the bridge candidates the new paths brought; `report_clearance` as in `requery`."""
         try:
             return self.stub.AddPaths(service_pb2.AddPathsRequest(
-                hgraph=hgraph, paths=make_paths(paths), measure=make_measure(measure, k, safety)),
+                hgraph=hgraph, paths=make_paths(paths), measure=make_measure(measure, k, safety),
+                report_clearance=report_clearance),
                 timeout=timeout, metadata=self._metadata(hgraph.split("/hgraphs/", 1)[0]))
         except grpc.RpcError as e:
             _raise(e)
