@@ -166,12 +166,15 @@ v1::PathQuality QualityToProto(const PathQuality& quality) {
 }
 
 PathQuality QualityFromProto(const v1::PathQuality& proto) {
+  // A server older than has_clearance (merge.proto 6) leaves it false but profiled every path
+  // it reported with clearance; a newer one sets the clearances 0 when it is false. So a
+  // positive clearance is known either way (a CLI of today against a replica not yet upgraded).
   return PathQuality{.length = proto.length(),
                      .min_clearance = proto.min_clearance(),
                      .avg_clearance = proto.avg_clearance(),
                      .inverse_clearance = proto.inverse_clearance(),
                      .k = proto.k(),
-                     .has_clearance = proto.has_clearance()};
+                     .has_clearance = proto.has_clearance() || proto.min_clearance() > 0};
 }
 
 v1::InputReport InputReportToProto(const InputReport& report) {

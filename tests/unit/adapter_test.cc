@@ -574,6 +574,22 @@ TEST(AdapterTest, MergeResultToProtoAndJson) {
   EXPECT_EQ(back.source_fraction, result.source_fraction);
   EXPECT_EQ(back.best_input, 0);
   EXPECT_EQ(back.objective, 1.5);
+  EXPECT_TRUE(back.quality.has_clearance);
+  EXPECT_EQ(back.quality.min_clearance, 0.25);
+}
+
+TEST(AdapterTest, QualityFromAServerBeforeHasClearanceKeepsItsClearances) {
+  // Such a server sent clearances without has_clearance; today's sends 0 when unknown.
+  v1::PathQuality older;
+  older.set_length(2);
+  older.set_min_clearance(0.125);
+  older.set_avg_clearance(0.5);
+  EXPECT_TRUE(QualityFromProto(older).has_clearance);
+  v1::PathQuality unknown;
+  unknown.set_length(2);
+  EXPECT_FALSE(QualityFromProto(unknown).has_clearance);
+  unknown.set_has_clearance(true);
+  EXPECT_TRUE(QualityFromProto(unknown).has_clearance);
 }
 
 }  // namespace
