@@ -267,8 +267,10 @@ void HybridizationSession::CheckEdges(const std::vector<int>& edge_ids, EdgeNeed
     edge.report = checker_->CheckEdge(EdgeCheckRequest{
         .from = &graph_.node(edge.u).q,
         .to = &graph_.node(edge.v).q,
-        .mode = need == EdgeNeed::kValidity           ? EdgeCheckMode::kSampled
-                : need == EdgeNeed::kCertificate      ? EdgeCheckMode::kCertified
+        .mode = need == EdgeNeed::kValidity ? EdgeCheckMode::kSampled
+                : need == EdgeNeed::kCertificate
+                    ? (previous.state == EdgeState::kValid ? EdgeCheckMode::kCertifiedOfValid
+                                                           : EdgeCheckMode::kCertified)
                 : previous.state == EdgeState::kValid ? EdgeCheckMode::kClearanceOfValid
                                                       : EdgeCheckMode::kClearance,
         .known = known.empty() ? nullptr : &known});

@@ -190,7 +190,8 @@ EdgeReport LocalPlanner::CheckEdge(const EdgeCheckRequest& request) const {
   const int segments = SampleCount(report.length) - 1;
   EdgeCheck check(s, impl_->body_component, impl_->body_radius, context, from, to);
   // Ends first: the end state is the one most likely to be new to the caller.
-  if (request.mode != EdgeCheckMode::kClearanceOfValid) {
+  if (request.mode != EdgeCheckMode::kClearanceOfValid &&
+      request.mode != EdgeCheckMode::kCertifiedOfValid) {
     if (!context.Valid(to)) return invalid(1.0);
     if (!context.Valid(from)) return invalid(0.0);
     for (int k : BisectionOrder(segments)) {
@@ -200,7 +201,8 @@ EdgeReport LocalPlanner::CheckEdge(const EdgeCheckRequest& request) const {
   }
   report.state = EdgeState::kValid;
   if (request.mode == EdgeCheckMode::kSampled) return finish();
-  if (request.mode == EdgeCheckMode::kCertified || request.mode == EdgeCheckMode::kCertifiedQuick) {
+  if (request.mode == EdgeCheckMode::kCertified || request.mode == EdgeCheckMode::kCertifiedQuick ||
+      request.mode == EdgeCheckMode::kCertifiedOfValid) {
     // Conservative advancement (see EdgeCheckMode::kCertified), two-sided: the motion bound is
     // linear in t along a straight motion, so a clearance c at t frees the robot for c / bound
     // of the way on either side of t. The next sample goes where, were its clearance c too, the

@@ -66,6 +66,10 @@ enum class EdgeCheckMode {
   // distance queries instead of a profile. It certifies a motion, or finds it in collision, only
   // where kCertified's samples and advancement do.
   kCertifiedQuick,
+  // As kCertified for a motion that already passed the validity check at this checker's
+  // resolution (the lazy search's edges on the path it found, the shortcuts' motions): skips
+  // the samples, whose answer is known, and certifies (or finds a collision) as kCertified does.
+  kCertifiedOfValid,
   // Validity and the clearance profile with its certificate (core/motion/local_planner.h).
   kClearance,
   // As kClearance for a motion that already passed the validity check at this checker's

@@ -308,6 +308,45 @@ TEST(LocalPlannerTest, CertifyAgreesWithTheClearanceCheckAndCostsLess) {
   EXPECT_FALSE(thin.certified);
 }
 
+// certify of a valid motion: kCertified without the samples the validity check already took.
+// The same verdict and certificate on every edge the samples pass, for exactly the samples'
+// collision checks less; and a motion that collides between its samples (a caller that
+// skipped the validity check) is still found, by the certificate.
+TEST(LocalPlannerTest, CertifyOfAValidMotionSkipsOnlyTheSamples) {
+  const auto world = CircleWorld();
+  const LocalPlanner planner(world, {.resolution = 0.02});
+  std::mt19937_64 rng(11);
+  int compared = 0;
+  for (int i = 0; i < 300; ++i) {
+    const Config from = world->space().Sample(rng);
+    Config to = world->space().Sample(rng);
+    to.head<2>() = from.head<2>() + 0.15 * (to.head<2>() - from.head<2>());
+    const EdgeReport sampled = Check(planner, from, to, false);
+    if (sampled.state != EdgeState::kValid) continue;
+    const EdgeReport certify =
+        planner.CheckEdge({.from = &from, .to = &to, .mode = EdgeCheckMode::kCertified});
+    const EdgeReport of_valid =
+        planner.CheckEdge({.from = &from, .to = &to, .mode = EdgeCheckMode::kCertifiedOfValid});
+    ++compared;
+    EXPECT_EQ(of_valid.state, certify.state) << "edge " << i;
+    EXPECT_EQ(of_valid.certified, certify.certified) << "edge " << i;
+    EXPECT_EQ(of_valid.has_clearance, certify.has_clearance) << "edge " << i;
+    EXPECT_EQ(of_valid.distance_queries, certify.distance_queries) << "edge " << i;
+    EXPECT_EQ(of_valid.collision_checks, certify.collision_checks - sampled.collision_checks)
+        << "edge " << i;
+  }
+  EXPECT_GT(compared, 30);
+
+  const LocalPlanner coarse(PointWorld({Box(3, 5, 0.05, 4)}), {.resolution = 0.5});
+  const Config a = Vec({1, 5}), b = Vec({9, 5});
+  ASSERT_EQ(Check(coarse, a, b, false).state, EdgeState::kValid);
+  const EdgeReport thin =
+      coarse.CheckEdge({.from = &a, .to = &b, .mode = EdgeCheckMode::kCertifiedOfValid});
+  EXPECT_EQ(thin.state, EdgeState::kInvalid);
+  EXPECT_FALSE(thin.certified);
+  EXPECT_EQ(thin.collision_checks, 0);
+}
+
 // certify quick: kCertified's advancement without the profile where it stalls. It certifies
 // only what certify certifies, finds the same collisions where it finds any, never costs more
 // distance queries, and gives a grazing motion up after its first query where certify profiles it.
