@@ -179,6 +179,7 @@ HybridizationSession::HybridizationSession(const MotionChecker& checker,
     goal_distance_[n] = space.Distance(graph_.node(n).q, graph_.node(graph_.goal()).q);
   }
   node_clearance_.assign(graph_.num_nodes(), std::numeric_limits<double>::quiet_NaN());
+  node_valid_.assign(graph_.num_nodes(), 0);
   node_witness_.assign(graph_.num_nodes(), {});
   probes_.assign(graph_.num_edges(), {});
   probe_rounds_.assign(graph_.num_edges(), 0);
@@ -273,7 +274,9 @@ void HybridizationSession::CheckEdges(const std::vector<int>& edge_ids, EdgeNeed
                                                            : EdgeCheckMode::kCertified)
                 : previous.state == EdgeState::kValid ? EdgeCheckMode::kClearanceOfValid
                                                       : EdgeCheckMode::kClearance,
-        .known = known.empty() ? nullptr : &known});
+        .known = known.empty() ? nullptr : &known,
+        .from_valid = node_valid_[edge.u] != 0,
+        .to_valid = node_valid_[edge.v] != 0});
     // A re-check for clearance keeps counting what the first check cost.
     if (previous.state != EdgeState::kUnchecked) {
       edge.report.collision_checks += previous.collision_checks;
@@ -284,6 +287,17 @@ void HybridizationSession::CheckEdges(const std::vector<int>& edge_ids, EdgeNeed
                   checker_->total_distance_queries() - queries_at_start);
   });
   cancel.ThrowIfStopped();
+  // The ends each check found valid, for the next checks (after the loop, so that what a check
+  // knows does not depend on the thread count). A check tests its end `to`, then `from`, then
+  // the motion between them: a collision inside the motion, or at `from`, leaves `to` valid.
+  for (const int e : edge_ids) {
+    const HEdge& edge = graph_.edge(e);
+    const EdgeReport& report = edge.report;
+    if (report.state == EdgeState::kUnchecked) continue;
+    const bool valid = report.state == EdgeState::kValid;
+    if (valid || report.invalid_at < 1) node_valid_[edge.v] = 1;
+    if (valid || (report.invalid_at > 0 && report.invalid_at < 1)) node_valid_[edge.u] = 1;
+  }
   *checked += total;
 }
 
@@ -619,6 +633,7 @@ void HybridizationSession::SyncEdgeData() {
   for (int n = static_cast<int>(goal_distance_.size()); n < graph_.num_nodes(); ++n) {
     goal_distance_.push_back(space.Distance(graph_.node(n).q, graph_.node(graph_.goal()).q));
     node_clearance_.push_back(nan);
+    node_valid_.push_back(0);
     node_witness_.emplace_back();
   }
   for (int e = static_cast<int>(edge_length_.size()); e < graph_.num_edges(); ++e) {
@@ -1156,7 +1171,8 @@ size_t HybridizationSession::memory_bytes() const {
   bytes += (edge_length_.capacity() + motion_bound_.capacity() + node_clearance_.capacity() +
             goal_distance_.capacity()) *
            sizeof(double);
-  bytes += probes_.capacity() * sizeof(std::vector<ClearanceSample>) + probe_rounds_.capacity();
+  bytes += probes_.capacity() * sizeof(std::vector<ClearanceSample>) + probe_rounds_.capacity() +
+           node_valid_.capacity();
   for (const auto& samples : probes_) bytes += samples.capacity() * sizeof(ClearanceSample);
   bytes += node_witness_.capacity() * sizeof(ClearanceWitness) + ceiling_done_.capacity() +
            ceiling_.capacity() * sizeof(std::vector<ClearanceSample>) +

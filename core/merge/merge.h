@@ -242,6 +242,7 @@ class HybridizationSession {
   std::vector<double> edge_length_;     // per edge: Space::Distance of its ends
   std::vector<double> motion_bound_;    // per edge: MotionChecker::MotionBound, NaN until needed
   std::vector<double> node_clearance_;  // per node: clearance, NaN until needed
+  std::vector<char> node_valid_;        // per node: 1 once an edge check found it valid
   std::vector<ClearanceWitness> node_witness_;  // per node: where its clearance was found
   std::vector<double> goal_distance_;           // per node: Space::Distance to the goal
   // Per edge, for measures that need clearance: the clearances probed on its profile's grid

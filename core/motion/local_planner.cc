@@ -192,8 +192,8 @@ EdgeReport LocalPlanner::CheckEdge(const EdgeCheckRequest& request) const {
   // Ends first: the end state is the one most likely to be new to the caller.
   if (request.mode != EdgeCheckMode::kClearanceOfValid &&
       request.mode != EdgeCheckMode::kCertifiedOfValid) {
-    if (!context.Valid(to)) return invalid(1.0);
-    if (!context.Valid(from)) return invalid(0.0);
+    if (!request.to_valid && !context.Valid(to)) return invalid(1.0);
+    if (!request.from_valid && !context.Valid(from)) return invalid(0.0);
     for (int k : BisectionOrder(segments)) {
       const double t = static_cast<double>(k) / segments;
       if (!context.Valid(check.At(t))) return invalid(t);

@@ -86,6 +86,10 @@ struct EdgeCheckRequest {
   // clearance of an end at t = 0 or 1), sorted by t; a profile takes them instead of querying
   // again. May be null.
   const std::vector<ClearanceSample>* known = nullptr;
+  // The caller knows this end valid (it passed a collision check at this checker): its
+  // collision check, the first of the samples, is skipped.
+  bool from_valid = false;
+  bool to_valid = false;
 };
 
 // True for the modes that record a clearance profile.

@@ -347,6 +347,35 @@ TEST(LocalPlannerTest, CertifyOfAValidMotionSkipsOnlyTheSamples) {
   EXPECT_EQ(thin.collision_checks, 0);
 }
 
+// Ends the caller knows valid skip their collision checks and nothing else: the same verdict,
+// the same place of a collision inside the motion, two checks fewer.
+TEST(LocalPlannerTest, EndsKnownValidSkipOnlyTheirChecks) {
+  const auto world = CircleWorld();
+  const LocalPlanner planner(world, {.resolution = 0.02});
+  auto context = world->MakeContext();
+  std::mt19937_64 rng(13);
+  int valid = 0, invalid_inside = 0;
+  for (int i = 0; i < 300; ++i) {
+    const Config from = world->space().Sample(rng);
+    const Config to = world->space().Sample(rng);
+    if (!context->Valid(from) || !context->Valid(to)) continue;
+    for (const EdgeCheckMode mode : {EdgeCheckMode::kSampled, EdgeCheckMode::kCertified}) {
+      const EdgeReport plain = planner.CheckEdge({.from = &from, .to = &to, .mode = mode});
+      const EdgeReport known = planner.CheckEdge(
+          {.from = &from, .to = &to, .mode = mode, .from_valid = true, .to_valid = true});
+      EXPECT_EQ(known.state, plain.state) << "edge " << i;
+      EXPECT_EQ(known.invalid_at, plain.invalid_at) << "edge " << i;
+      EXPECT_EQ(known.certified, plain.certified) << "edge " << i;
+      EXPECT_EQ(known.collision_checks, plain.collision_checks - 2) << "edge " << i;
+      EXPECT_EQ(known.distance_queries, plain.distance_queries) << "edge " << i;
+      if (mode == EdgeCheckMode::kSampled)
+        (plain.state == EdgeState::kValid ? valid : invalid_inside)++;
+    }
+  }
+  EXPECT_GT(valid, 10);
+  EXPECT_GT(invalid_inside, 10);
+}
+
 // certify quick: kCertified's advancement without the profile where it stalls. It certifies
 // only what certify certifies, finds the same collisions where it finds any, never costs more
 // distance queries, and gives a grazing motion up after its first query where certify profiles it.
