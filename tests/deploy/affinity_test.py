@@ -139,10 +139,15 @@ def main():
 
         # 1. Sessions through nginx, named from a seeded generator (the test is repeatable).
         rng = random.Random(7)
-        for i in range(8):
+
+        def open_session():
             c = hgraph_client.connect(front, backoff_s=0.1)
             c.session_name = "sessions/%032x" % rng.getrandbits(128)
             c.create_session(c.upload_scene(scene))
+            return c
+
+        for i in range(8):
+            c = open_session()
             outcome = c.merge(paths, measure="length", variant="edit-distance")
             expect(outcome.result.path.waypoints, f"session {i}: empty merge")
             c.check(paths)
@@ -157,10 +162,8 @@ def main():
         # The ring hashes the replicas' loopback ports, chosen now: nine sessions all land on one
         # replica in about one run of 2000. Twenty-four more sessions (created, then deleted)
         # make the spread check below fail only without hashing.
-        for i in range(24):
-            c = hgraph_client.connect(front, backoff_s=0.1)
-            c.session_name = "sessions/%032x" % rng.getrandbits(128)
-            c.create_session(c.upload_scene(scene))
+        for _ in range(24):
+            c = open_session()
             names.append(c.session)
             c.delete_session()
             c.close()
