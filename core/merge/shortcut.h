@@ -2,7 +2,8 @@
 // post-optimization"): a path is shortened by replacing the stretch between two of its points,
 // anywhere along its edges, by the straight motion between them when the local planner proves
 // that motion free (EdgeCheckRequest::certify). OMPL's PathSimplifier does the same with a
-// sampled check; every motion accepted here carries a certificate.
+// sampled check; every motion accepted here carries a certificate, unless the caller asks for
+// sampled checks only (ShortcutRequest::lazy) and certifies what it keeps.
 #pragma once
 
 #include <cstdint>
@@ -42,12 +43,16 @@ struct ShortcutRequest {
   // between. A path that turns while it moves loses the turns' detours where no straight motion
   // is free. Only in spaces with two parts or more.
   double partial = 0;
+  // Motions taken when valid at the resolution's samples (EdgeCheckMode::kSampled), without a
+  // certificate: for a path that a certified search over the H-Graph takes apart afterwards
+  // (lazy), where most motions a shortcut takes are replaced by later ones. Not with safety.
+  bool lazy = false;
   // Threads that check a batch of shortcuts at once (0 = all cores). The result does not depend
   // on it: the batches are fixed, only their checks run in parallel.
   int threads = 1;
   // The report of the motion between the waypoints with ids a and b when the caller already
   // knows it (an H-Graph edge); nullptr when it does not. Only a report that is invalid, or
-  // valid and certified, is taken instead of a check. May be empty.
+  // valid and certified (lazy: valid), is taken instead of a check. May be empty.
   std::function<const EdgeReport*(int a, int b)> known;
 };
 

@@ -91,6 +91,37 @@ TEST_F(ShortcutTest, ShortensKeepsTheEndpointsAndEveryEdgeIsCertified) {
   ExpectCertified(r.path);
 }
 
+// Lazy shortcuts (ShortcutRequest::lazy) take motions valid at their samples: no distance query
+// at all, where the certified ones make some; a shorter path with the endpoints, every edge valid
+// when checked again at its samples, the new ones uncertified (the caller certifies them).
+TEST_F(ShortcutTest, LazyShortcutsCheckOnlyTheSamples) {
+  const Space& space = planner_.space();
+  const int64_t queries_before = planner_.total_distance_queries();
+  ShortcutCertified(planner_, Request());
+  const int64_t certified_queries = planner_.total_distance_queries() - queries_before;
+  EXPECT_GT(certified_queries, 0);
+  ShortcutRequest request = Request();
+  request.lazy = true;
+  const int64_t checks_before = planner_.total_collision_checks();
+  const ShortcutResult r = ShortcutCertified(planner_, request);
+  EXPECT_EQ(planner_.total_distance_queries() - queries_before, certified_queries);
+  EXPECT_GT(planner_.total_collision_checks(), checks_before);
+  ASSERT_GT(r.accepted, 0);
+  EXPECT_LT(Length(space, r.path), Length(space, path_) * (1 - 1e-3));
+  EXPECT_TRUE(r.path.waypoints.front().isApprox(path_.waypoints.front()));
+  EXPECT_TRUE(r.path.waypoints.back().isApprox(path_.waypoints.back()));
+  ASSERT_EQ(r.edges.size() + 1, r.path.waypoints.size());
+  int uncertified = 0;
+  for (size_t j = 0; j < r.edges.size(); ++j) {
+    const EdgeReport sampled = planner_.CheckEdge({.from = &r.path.waypoints[j],
+                                                   .to = &r.path.waypoints[j + 1],
+                                                   .mode = EdgeCheckMode::kSampled});
+    EXPECT_EQ(sampled.state, EdgeState::kValid) << "edge " << j;
+    uncertified += r.edges[j].state == EdgeState::kValid && !r.edges[j].certified;
+  }
+  EXPECT_GT(uncertified, 0);
+}
+
 TEST_F(ShortcutTest, CornerCutsReplaceCornersByCertifiedMotions) {
   ShortcutRequest request = Request();
   request.corners_only = true;
