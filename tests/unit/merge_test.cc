@@ -385,43 +385,38 @@ TEST(MergeMeshTest, RestartsKeepTheInvariantsAndLeaveALocalOptimum) {
   EXPECT_TRUE(left_an_optimum);
 }
 
-// Restarts shorten the inputs lazily (ShortcutRequest::lazy): motions valid at their samples
-// join the H-Graph without a certificate, beside the lazy search's own. The merge's path and the
-// paths of later queries on the same H-Graph, under every measure, are still certified (under
-// safe length keeping the safety; under length no longer than the merge's).
+// On the mesh problems, restarts shorten the inputs lazily (ShortcutRequest::lazy): motions valid
+// at their samples join the H-Graph without a certificate, beside the lazy search's own. The
+// merge's path and the paths of later queries on the same H-Graph, under every measure, are still
+// certified (under safe length keeping the safety; under length no longer than the merge's).
 TEST(MergeMeshTest, QueriesAfterLazyRestartsReturnCertifiedPaths) {
-  const std::string scene =
-      std::string(HGRAPH_SOURCE_DIR) + "/tests/bench/scenes/hole_wall/scene.json";
-  const LocalPlanner planner(std::make_shared<CollisionWorld>(LoadSceneFile(scene)),
-                             {.resolution = SceneResolution(ReadSceneFile(scene))});
-  const std::vector<InputPath> inputs = LoadPathsFile(
-      std::string(HGRAPH_TEST_DATA_DIR) + "/hole_wall/prm4_seed1.json", planner.space());
-  HybridizationSession session(planner,
-                               MergeRequest{.paths = inputs, .options = {.optimize_restarts = 2}});
-  const auto expect_certified = [&](const MergeResult& r) {
-    const InputReport check = CheckPaths(planner, {.paths = {r.path}}).paths.at(0);
-    EXPECT_TRUE(check.valid && check.certified);
-    EXPECT_TRUE(r.path.waypoints.front().isApprox(inputs[0].waypoints.front()));
-    EXPECT_TRUE(r.path.waypoints.back().isApprox(inputs[0].waypoints.back()));
-    return check;
-  };
-  const InputReport merged = expect_certified(session.Query({}));
-  const double safety = 0.5 * SafestInputClearance(planner, inputs);
-  for (const MeasureSpec& measure :
-       {MeasureSpec{.type = MeasureType::kBottleneckClearance},
-        MeasureSpec{.type = MeasureType::kInverseClearance, .k = 3},
-        MeasureSpec{.type = MeasureType::kSafeLength, .safety = safety},
-        MeasureSpec{.type = MeasureType::kLength}}) {
-    SCOPED_TRACE(MeasureTypeName(measure.type));
-    const MergeResult r = session.Query(measure);
-    const InputReport check = expect_certified(r);
-    if (measure.type == MeasureType::kSafeLength) {
-      EXPECT_GE(check.quality.min_clearance, safety);
+  ForMeshProblems([](const LocalPlanner& planner, const std::vector<InputPath>& inputs) {
+    HybridizationSession session(
+        planner, MergeRequest{.paths = inputs, .options = {.optimize_restarts = 2}});
+    const auto expect_certified = [&](const MergeResult& r) {
+      const InputReport check = CheckPaths(planner, {.paths = {r.path}}).paths.at(0);
+      EXPECT_TRUE(check.valid && check.certified);
+      EXPECT_TRUE(r.path.waypoints.front().isApprox(inputs[0].waypoints.front()));
+      EXPECT_TRUE(r.path.waypoints.back().isApprox(inputs[0].waypoints.back()));
+      return check;
+    };
+    const InputReport merged = expect_certified(session.Query({}));
+    const double safety = 0.5 * SafestInputClearance(planner, inputs);
+    for (const MeasureSpec& measure :
+         {MeasureSpec{.type = MeasureType::kBottleneckClearance},
+          MeasureSpec{.type = MeasureType::kInverseClearance, .k = 3},
+          MeasureSpec{.type = MeasureType::kSafeLength, .safety = safety},
+          MeasureSpec{.type = MeasureType::kLength}}) {
+      SCOPED_TRACE(MeasureTypeName(measure.type));
+      const InputReport check = expect_certified(session.Query(measure));
+      if (measure.type == MeasureType::kSafeLength) {
+        EXPECT_GE(check.quality.min_clearance, safety);
+      }
+      if (measure.type == MeasureType::kLength) {
+        EXPECT_LE(check.quality.length, merged.quality.length + 1e-9);
+      }
     }
-    if (measure.type == MeasureType::kLength) {
-      EXPECT_LE(check.quality.length, merged.quality.length + 1e-9);
-    }
-  }
+  });
 }
 
 // A budget of an hour, spent on restarts that make the H-Graph dense (bridges from every new
