@@ -226,9 +226,10 @@ void PrintMergeTable(const MergeResult& r) {
   std::printf("measure %s (%s variant): objective %s", MeasureTypeName(r.measure.type),
               VariantName(r.variant), Cell(r.objective, 0).c_str());
   if (r.stats.optimize_rounds > 0) {
-    std::printf(" (H-Graph optimum %s, %lld shortcuts in %lld rounds)",
+    std::printf(" (H-Graph optimum %s, %lld shortcuts in %lld rounds, stopped: %s)",
                 Cell(r.hgraph_objective, 0).c_str(), static_cast<long long>(r.stats.shortcuts),
-                static_cast<long long>(r.stats.optimize_rounds));
+                static_cast<long long>(r.stats.optimize_rounds),
+                OptimizeStopName(r.stats.optimize_stop));
   }
   if (r.best_input >= 0 && r.best_input < static_cast<int>(r.inputs.size())) {
     std::printf(", best input '%s' %s", r.inputs[r.best_input].name.c_str(),

@@ -273,8 +273,9 @@ Subcommand AddMergeCommand(CLI::App& parent) {
   f.optimize_ms_opt = app->add_option(
       "--optimize-ms", f.optimize_ms,
       "Budget of the post-optimization (certified shortcuts re-hybridized, length and "
-      "safe-length), ms; 0 = off (default: automatic, until a round gains < 0.1%, <= 2000 ms); a "
-      "budget given is spent, on --restarts once the rounds stop gaining");
+      "safe-length), ms; 0 = off (default: automatic, until a round gains < 0.1%, at most 100 "
+      "rounds: the same answer on any machine); a budget given is spent, on --restarts once the "
+      "rounds stop gaining");
   f.optimize_restarts_opt = app->add_option(
       "--restarts", f.optimize_restarts,
       "Restarts of the post-optimization from the input paths once its rounds stop gaining, "

@@ -74,6 +74,29 @@ v1::Variant VariantToProto(Variant variant) {
   return v1::VARIANT_UNSPECIFIED;
 }
 
+v1::OptimizeStop OptimizeStopToProto(OptimizeStop stop) {
+  switch (stop) {
+    case OptimizeStop::kOff: return v1::OPTIMIZE_STOP_OFF;
+    case OptimizeStop::kConverged: return v1::OPTIMIZE_STOP_CONVERGED;
+    case OptimizeStop::kRounds: return v1::OPTIMIZE_STOP_ROUNDS;
+    case OptimizeStop::kTime: return v1::OPTIMIZE_STOP_TIME;
+    case OptimizeStop::kGrowth: return v1::OPTIMIZE_STOP_GROWTH;
+  }
+  return v1::OPTIMIZE_STOP_UNSPECIFIED;
+}
+
+// A result from a server older than the field (or a value newer than this reader) reads as off:
+// it says nothing a client could rely on.
+OptimizeStop OptimizeStopFromProto(v1::OptimizeStop stop) {
+  switch (stop) {
+    case v1::OPTIMIZE_STOP_CONVERGED: return OptimizeStop::kConverged;
+    case v1::OPTIMIZE_STOP_ROUNDS: return OptimizeStop::kRounds;
+    case v1::OPTIMIZE_STOP_TIME: return OptimizeStop::kTime;
+    case v1::OPTIMIZE_STOP_GROWTH: return OptimizeStop::kGrowth;
+    default: return OptimizeStop::kOff;
+  }
+}
+
 MergeOptions MergeOptionsFromProto(const v1::MergeOptions& proto) {
   MergeOptions options;
   options.candidates.variant = VariantFromProto(proto.variant());
@@ -243,6 +266,7 @@ v1::MergeResult MergeResultToProto(const MergeResult& result) {
   stats->set_node_clearances(s.node_clearances);
   stats->set_optimize_rounds(s.optimize_rounds);
   stats->set_shortcuts(s.shortcuts);
+  stats->set_optimize_stop(OptimizeStopToProto(s.optimize_stop));
   const MergeTiming& t = result.timing;
   v1::Timing* timing = proto.mutable_timing();
   timing->set_validate_ms(t.validate_ms);
@@ -289,6 +313,7 @@ MergeResult MergeResultFromProto(const v1::MergeResult& proto) {
                             .node_clearances = s.node_clearances(),
                             .optimize_rounds = s.optimize_rounds(),
                             .shortcuts = s.shortcuts(),
+                            .optimize_stop = OptimizeStopFromProto(s.optimize_stop()),
                             .threads = s.threads(),
                             .alignments = s.alignments(),
                             .radius = s.radius(),

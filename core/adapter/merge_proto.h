@@ -14,6 +14,8 @@ v1::Measure MeasureToProto(const MeasureSpec& spec);
 
 Variant VariantFromProto(v1::Variant variant);
 v1::Variant VariantToProto(Variant variant);
+v1::OptimizeStop OptimizeStopToProto(OptimizeStop stop);
+OptimizeStop OptimizeStopFromProto(v1::OptimizeStop stop);
 
 // Everything of v1::MergeOptions but the resolution, which belongs to the local planner (see
 // ResolutionFromProto).

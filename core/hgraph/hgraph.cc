@@ -169,10 +169,28 @@ void HGraph::AppendPath(const Space& space, int p, double max_node_spacing) {
   }
 }
 
-int HGraph::AddNode(const Config& q) {
-  nodes_.push_back(HNode{.q = q, .path = -1, .index = -1});
+int HGraph::AddNode(const Config& q, int path, int index, double t) {
+  HGRAPH_CHECK(path < num_paths());
+  nodes_.push_back(HNode{.q = q, .path = path, .index = path < 0 ? -1 : index, .t = t});
   adjacency_.emplace_back();
   return num_nodes() - 1;
+}
+
+void HGraph::Truncate(int nodes, int edges) {
+  HGRAPH_CHECK(nodes >= 2 && nodes <= num_nodes() && edges >= 0 && edges <= num_edges());
+  for (const std::vector<int>& ids : path_nodes_) {
+    for (int n : ids) HGRAPH_CHECK(n < nodes);
+  }
+  for (const std::vector<int>& ids : path_edges_) {
+    for (int e : ids) HGRAPH_CHECK(e < edges);
+  }
+  nodes_.resize(static_cast<size_t>(nodes));
+  edges_.resize(static_cast<size_t>(edges));
+  adjacency_.resize(static_cast<size_t>(nodes));
+  // Each list holds its edges in the order they were added, so the dropped ones are at its end.
+  for (auto& list : adjacency_) {
+    while (!list.empty() && list.back().second >= edges) list.pop_back();
+  }
 }
 
 int HGraph::AddEdge(int u, int v, bool input) {

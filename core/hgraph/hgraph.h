@@ -68,9 +68,15 @@ class HGraph {
                         double endpoint_tolerance, double max_node_spacing,
                         const std::string& field) const;
 
-  // Adds a node outside every input path (path = -1; the post-optimization's shortcut points)
-  // and returns its id.
-  int AddNode(const Config& q);
+  // Adds a node outside the input paths' node lists (the post-optimization's shortcut points)
+  // and returns its id. `path`, `index` and `t` say where it lies on an input, as HNode does
+  // for a subdivision node (index is then the input edge (index, index + 1), t in [0, 1)); path
+  // -1 for a point on no input (a partial shortcut's, or one on a bridge).
+  int AddNode(const Config& q, int path = -1, int index = -1, double t = 0);
+  // Drops the nodes from `nodes` on and the edges from `edges` on, so that the H-Graph is what
+  // it was when it held that many (a query's overlay). The input paths' nodes and edges must
+  // all be kept.
+  void Truncate(int nodes, int edges);
 
   int num_nodes() const { return static_cast<int>(nodes_.size()); }
   int num_edges() const { return static_cast<int>(edges_.size()); }

@@ -14,7 +14,9 @@
 #include "core/hgraph/bridge_candidates.h"
 #include "core/hgraph/hgraph.h"
 #include "core/measure/measure.h"
+#include "core/merge/evidence.h"
 #include "core/merge/path_check.h"
+#include "core/merge/shortcut.h"
 #include "core/motion/motion_checker.h"
 #include "core/search/search.h"
 
@@ -73,6 +75,17 @@ struct MergeRequest {
   CancelToken cancel;
 };
 
+// What ended the post-optimization's rounds (MergeStats::optimize_stop).
+enum class OptimizeStop {
+  kOff,        // not run: optimize_ms 0, or a measure it does not serve
+  kConverged,  // a round gained less than 0.1% (and, with restarts, each restart ran)
+  kRounds,     // the automatic budget's rounds ran out
+  kTime,       // the client's optimize_ms ran out
+  kGrowth,     // the overlay reached limits::kMaxOptimizeNodes or kMaxOptimizeEdges
+};
+// "off", "converged", "rounds", "time", "growth".
+const char* OptimizeStopName(OptimizeStop stop);
+
 struct MergeStats {
   int64_t nodes = 0;
   int64_t input_edges = 0;
@@ -87,6 +100,7 @@ struct MergeStats {
   int64_t node_clearances = 0;  // node clearances computed for the lazy bounds
   int64_t optimize_rounds = 0;  // post-optimization rounds
   int64_t shortcuts = 0;        // shortcuts the post-optimization accepted
+  OptimizeStop optimize_stop = OptimizeStop::kOff;
   int threads = 0;
   int alignments = 0;
   double radius = 0;
@@ -225,6 +239,8 @@ class HybridizationSession {
   // The nodes of a path found, as the output lists them: a node at the same configuration as
   // the one before it (an input that repeats a waypoint) once.
   std::vector<int> OutputNodes(const SearchResult& found) const;
+  // Where each node of `ids` lies on an input (ShortcutRequest::sources).
+  std::vector<WaypointSource> SourcesOf(const std::vector<int>& ids) const;
 
   const MotionChecker* checker_;
   MergeOptions options_;
@@ -232,29 +248,10 @@ class HybridizationSession {
   MergeStats build_stats_;
   MergeTiming build_timing_;
   bool first_query_ = true;
-  // Nodes and edges the post-optimizations of every query so far added (bounded by
-  // limits::kMaxOptimizeNodes and kMaxOptimizeEdges over the session's life).
-  int optimize_nodes_ = 0;
-  int optimize_edges_ = 0;
   // The edges of the last query's result under a measure that needs no clearance (a length
   // merge's path, certified but not profiled unless report_clearance).
   std::vector<int> unprofiled_result_;
-  std::vector<double> edge_length_;     // per edge: Space::Distance of its ends
-  std::vector<double> motion_bound_;    // per edge: MotionChecker::MotionBound, NaN until needed
-  std::vector<double> node_clearance_;  // per node: clearance, NaN until needed
-  std::vector<char> node_valid_;        // per node: 1 once an edge check found it valid
-  std::vector<ClearanceWitness> node_witness_;  // per node: where its clearance was found
-  std::vector<double> goal_distance_;           // per node: Space::Distance to the goal
-  // Per edge, for measures that need clearance: the clearances probed on its profile's grid
-  // before the profile itself (MotionChecker::ProbeClearance), and how many probe rounds ran.
-  std::vector<std::vector<ClearanceSample>> probes_;
-  std::vector<int8_t> probe_rounds_;
-  std::vector<int8_t> scanned_;  // per edge: ScanForContact ran
-  // Per edge: upper bounds on its clearance at points of its profile's grid, from its ends'
-  // witnesses (EdgeBoundInput::ceiling), once both ends have one.
-  std::vector<std::vector<ClearanceSample>> ceiling_;
-  std::vector<int8_t> ceiling_done_;
-  std::vector<std::vector<ClearanceWitness>> probe_witness_;  // per edge: its probes' witnesses
+  EdgeEvidence evidence_;
 };
 
 // Build + one query.

@@ -73,6 +73,8 @@ constexpr double kMinCornerGain = 1e-4;
 struct Candidate {
   size_t e0 = 0;
   size_t e1 = 0;
+  double t0 = 0;
+  double t1 = 0;
   Config a;
   Config b;
   std::vector<Config> points;
@@ -82,6 +84,28 @@ struct Candidate {
 };
 
 }  // namespace
+
+WaypointSource SourceBetween(const WaypointSource& a, const WaypointSource& b, double t) {
+  if (a.path < 0 || a.path != b.path) return {};
+  // A waypoint at the start of input edge i (t = 0) is also the end of edge i - 1.
+  int index = a.index;
+  double from = a.t;
+  double to = 0;
+  if (b.index == a.index) {
+    to = b.t;
+  } else if (b.index == a.index + 1 && b.t == 0) {
+    to = 1;
+  } else if (a.index == b.index + 1 && a.t == 0) {
+    index = b.index;
+    from = 1;
+    to = b.t;
+  } else {
+    return {};
+  }
+  const double at = from + t * (to - from);
+  if (at >= 1) return WaypointSource{.path = a.path, .index = index + 1, .t = 0};
+  return WaypointSource{.path = a.path, .index = index, .t = std::max(0.0, at)};
+}
 
 ShortcutResult ShortcutCertified(const MotionChecker& checker, const ShortcutRequest& request,
                                  const CancelToken& cancel) {
@@ -95,6 +119,9 @@ ShortcutResult ShortcutCertified(const MotionChecker& checker, const ShortcutReq
   std::vector<int>& ids = out.ids;
   ids = request.ids;
   if (ids.size() != q.size()) ids.assign(q.size(), -1);
+  std::vector<WaypointSource>& sources = out.sources;
+  sources = request.sources;
+  if (sources.size() != q.size()) sources.assign(q.size(), WaypointSource{});
   std::vector<EdgeReport>& edges = out.edges;
   edges = request.edges;
   if (edges.size() != q.size() - 1) {
@@ -161,6 +188,7 @@ ShortcutResult ShortcutCertified(const MotionChecker& checker, const ShortcutReq
       const size_t j = drops[d];
       q.erase(q.begin() + static_cast<std::ptrdiff_t>(j));
       ids.erase(ids.begin() + static_cast<std::ptrdiff_t>(j));
+      sources.erase(sources.begin() + static_cast<std::ptrdiff_t>(j));
       edges.erase(edges.begin() + static_cast<std::ptrdiff_t>(j));
       edges[j - 1] = std::move(drop_reports[d]);
       settled.erase(settled.begin() + static_cast<std::ptrdiff_t>(j));
@@ -203,9 +231,10 @@ ShortcutResult ShortcutCertified(const MotionChecker& checker, const ShortcutReq
       double s1 = position(rng);
       if (s0 > s1) std::swap(s0, s1);
       Candidate c;
-      double t0 = 0, t1 = 0;
-      locate(s0, &c.e0, &t0);
-      locate(s1, &c.e1, &t1);
+      locate(s0, &c.e0, &c.t0);
+      locate(s1, &c.e1, &c.t1);
+      const double t0 = c.t0;
+      const double t1 = c.t1;
       if (c.e0 == c.e1) continue;  // one straight edge: nothing to gain
       c.a = space.Interpolate(q[c.e0], q[c.e0 + 1], t0);
       c.b = space.Interpolate(q[c.e1], q[c.e1 + 1], t1);
@@ -274,29 +303,36 @@ ShortcutResult ShortcutCertified(const MotionChecker& checker, const ShortcutReq
       EdgeReport tail = Piece(space, edges[c.e1], c.b, q[c.e1 + 1]);
       std::vector<Config> nq(q.begin(), q.begin() + static_cast<std::ptrdiff_t>(c.e0 + 1));
       std::vector<int> ni(ids.begin(), ids.begin() + static_cast<std::ptrdiff_t>(c.e0 + 1));
+      std::vector<WaypointSource> ns(sources.begin(),
+                                     sources.begin() + static_cast<std::ptrdiff_t>(c.e0 + 1));
       std::vector<EdgeReport> ne(edges.begin(), edges.begin() + static_cast<std::ptrdiff_t>(c.e0));
       // Zero-length pieces (a point at a waypoint) are left out.
       if (head.length > 0) {
         nq.push_back(c.a);
         ni.push_back(-1);
+        ns.push_back(SourceBetween(sources[c.e0], sources[c.e0 + 1], c.t0));
         ne.push_back(std::move(head));
       }
       for (size_t j = 0; j < c.points.size(); ++j) {
         nq.push_back(std::move(c.points[j]));
         ni.push_back(-1);
+        ns.emplace_back();
         ne.push_back(std::move(c.reports[j]));
       }
       ne.push_back(std::move(c.reports.back()));
       if (tail.length > 0) {
         nq.push_back(c.b);
         ni.push_back(-1);
+        ns.push_back(SourceBetween(sources[c.e1], sources[c.e1 + 1], c.t1));
         ne.push_back(std::move(tail));
       }
       nq.insert(nq.end(), q.begin() + static_cast<std::ptrdiff_t>(c.e1 + 1), q.end());
       ni.insert(ni.end(), ids.begin() + static_cast<std::ptrdiff_t>(c.e1 + 1), ids.end());
+      ns.insert(ns.end(), sources.begin() + static_cast<std::ptrdiff_t>(c.e1 + 1), sources.end());
       ne.insert(ne.end(), edges.begin() + static_cast<std::ptrdiff_t>(c.e1 + 1), edges.end());
       q = std::move(nq);
       ids = std::move(ni);
+      sources = std::move(ns);
       edges = std::move(ne);
       ++out.accepted;
     }
@@ -312,6 +348,7 @@ ShortcutResult ShortcutCertified(const MotionChecker& checker, const ShortcutReq
     struct Cut {
       Config a;
       Config b;
+      double f = 0;
       EdgeReport report;
       bool free = false;
       int checks = 0;
@@ -323,6 +360,7 @@ ShortcutResult ShortcutCertified(const MotionChecker& checker, const ShortcutReq
       if (cancel.stopped()) return;
       for (double f = 0.5; f >= kMinCornerCut; f /= 2) {
         Cut& cut = cuts[j];
+        cut.f = f;
         cut.a = space.Interpolate(q[j], q[j - 1], f);
         cut.b = space.Interpolate(q[j], q[j + 1], f);
         if (space.Distance(cut.a, cut.b) >=
@@ -338,6 +376,7 @@ ShortcutResult ShortcutCertified(const MotionChecker& checker, const ShortcutReq
     cancel.ThrowIfStopped();
     std::vector<Config> nq{q.front()};
     std::vector<int> ni{ids.front()};
+    std::vector<WaypointSource> ns{sources.front()};
     std::vector<EdgeReport> ne;
     // Edge j - 1 of the path, from the previous corner's cut (if any) to this one's (if any): the
     // edge itself, or a piece of it.
@@ -351,6 +390,7 @@ ShortcutResult ShortcutCertified(const MotionChecker& checker, const ShortcutReq
         add_edge(j, q[j]);
         nq.push_back(q[j]);
         ni.push_back(ids[j]);
+        ns.push_back(sources[j]);
         continue;
       }
       // Two cuts at the middle of one edge meet there: the point is kept once.
@@ -358,17 +398,21 @@ ShortcutResult ShortcutCertified(const MotionChecker& checker, const ShortcutReq
         add_edge(j, cuts[j].a);
         nq.push_back(cuts[j].a);
         ni.push_back(-1);
+        ns.push_back(SourceBetween(sources[j], sources[j - 1], cuts[j].f));
       }
       ne.push_back(std::move(cuts[j].report));
       nq.push_back(cuts[j].b);
       ni.push_back(-1);
+      ns.push_back(SourceBetween(sources[j], sources[j + 1], cuts[j].f));
       ++out.accepted;
     }
     add_edge(q.size() - 1, q.back());
     nq.push_back(q.back());
     ni.push_back(ids.back());
+    ns.push_back(sources.back());
     q = std::move(nq);
     ids = std::move(ni);
+    sources = std::move(ns);
     edges = std::move(ne);
   }
   return out;

@@ -22,12 +22,26 @@ namespace hgraph {
 // not depend on the thread count.
 inline constexpr int kShortcutBatch = 8;
 
+// Where a waypoint lies on an input path, as an H-Graph node says it (HNode path, index, t: on
+// the input's edge (index, index + 1) at fraction t); path -1 where it lies on none.
+struct WaypointSource {
+  int path = -1;
+  int index = -1;
+  double t = 0;
+};
+
+// The source of the point a fraction t of the way from a waypoint of source `a` to one of
+// source `b`: on the input edge both lie on (their motion is a piece of it), else on none.
+WaypointSource SourceBetween(const WaypointSource& a, const WaypointSource& b, double t);
+
 struct ShortcutRequest {
   InputPath path;
   // The reports of the path's edges when they are known (certified), else empty.
   std::vector<EdgeReport> edges;
   // An id per waypoint that the result carries along (an H-Graph node); empty: none.
   std::vector<int> ids;
+  // The source of each waypoint; empty: none known. The result's new points get theirs from it.
+  std::vector<WaypointSource> sources;
   uint64_t seed = 1;
   // Random pairs of points tried per pass; 0: 5 per waypoint, at least 30.
   int attempts = 0;
@@ -60,7 +74,10 @@ struct ShortcutResult {
   InputPath path;
   std::vector<EdgeReport> edges;  // one per edge of `path`
   std::vector<int> ids;           // per waypoint: the request's id, -1 for a new point
-  int accepted = 0;               // shortcuts taken
+  // Per waypoint: the request's source, or for a new point where it lies (SourceBetween; none
+  // for a partial shortcut's points).
+  std::vector<WaypointSource> sources;
+  int accepted = 0;  // shortcuts taken
   int64_t edges_checked = 0;
   // The motions checked between two waypoints that carry ids (a, b, report), so that the caller
   // can keep them.

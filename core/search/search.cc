@@ -115,7 +115,8 @@ SearchResult Extract(const HGraph& graph, const Tree& tree) {
 // is `parent_value`; `key` is the entry's value (kSum: cost so far plus cost to go; widest:
 // width so far) from the edge's bound or its exact value. Entries of equal key (many, under a
 // widest search's cap) go by `rank`: an edge that settles the node without a check first, then
-// one checked valid, then the others; and then by `tie`, the node's length to go.
+// one checked valid, then the others (widest searches only); and then by `tie`, the node's length
+// to go, and by node and edge ids.
 struct LazyEntry {
   double key = 0;
   double parent_value = 0;
@@ -174,8 +175,14 @@ SearchResult LazySearch(const HGraph& graph, const SearchEdgeFn& see, const Exac
         return a.key > b.key;  // min-heap on cost
       }
     }
-    if (a.rank != b.rank) return a.rank > b.rank;
-    return a.tie > b.tie;
+    // A widest search's many entries of equal key (its cap) go by what is known of them, which
+    // decides only how much it checks: what it returns is a width, or whether one is reached.
+    // A sum search's path is the answer, so its ties go by one fixed rule whatever is known
+    // (length to go, then node and edge ids): the same path whichever queries came before.
+    if (kWidest && a.rank != b.rank) return a.rank > b.rank;
+    if (a.tie != b.tie) return a.tie > b.tie;
+    if (a.node != b.node) return a.node > b.node;
+    return a.edge > b.edge;
   };
   std::priority_queue<LazyEntry, std::vector<LazyEntry>, decltype(worse)> open(worse);
   std::vector<double> value(graph.num_nodes(), kWidest ? -1.0 : kInf);

@@ -146,6 +146,59 @@ TEST_F(ShortcutTest, CornerCutsReplaceCornersByCertifiedMotions) {
   ExpectCertified(r.path);
 }
 
+// Where the result's waypoints lie on the input (ShortcutRequest::sources): a kept waypoint keeps
+// its source, a new point on one of the input's edges names that edge and its fraction (corner
+// cuts put every new point there), and a point on a motion the shortcuts made names none.
+TEST_F(ShortcutTest, NewPointsNameTheInputEdgeTheyLieOn) {
+  const Space& space = planner_.space();
+  for (const bool corners : {true, false}) {
+    SCOPED_TRACE(corners ? "corner cuts" : "random shortcuts");
+    ShortcutRequest request = Request();
+    request.corners_only = corners;
+    request.edges = CertifiedEdges(planner_, path_);
+    for (size_t j = 0; j < path_.waypoints.size(); ++j) {
+      request.sources.push_back(WaypointSource{.path = 4, .index = static_cast<int>(j)});
+    }
+    const ShortcutResult r = ShortcutCertified(planner_, request);
+    ASSERT_GT(r.accepted, 0);
+    ASSERT_EQ(r.sources.size(), r.path.waypoints.size());
+    int inside = 0;
+    for (size_t j = 0; j < r.path.waypoints.size(); ++j) {
+      SCOPED_TRACE("waypoint " + std::to_string(j));
+      const WaypointSource& source = r.sources[j];
+      if (r.ids[j] >= 0) {
+        EXPECT_EQ(source.index, r.ids[j]);
+        EXPECT_EQ(source.t, 0);
+        continue;
+      }
+      if (source.path < 0) continue;  // a shortcut's end on a motion that is not the input's
+      EXPECT_EQ(source.path, 4);
+      ASSERT_GE(source.index, 0);
+      ASSERT_LT(source.index + 1, static_cast<int>(path_.waypoints.size()));
+      EXPECT_GT(source.t, 0);
+      EXPECT_LT(source.t, 1);
+      const Config at = space.Interpolate(path_.waypoints[source.index],
+                                          path_.waypoints[source.index + 1], source.t);
+      EXPECT_LT(space.Distance(at, r.path.waypoints[j]), 1e-9);
+      ++inside;
+    }
+    if (corners) {
+      EXPECT_GT(inside, 0);
+      // Every cut's points lie on the input's own edges.
+      const auto made = std::count_if(r.ids.begin(), r.ids.end(), [](int id) { return id < 0; });
+      EXPECT_EQ(inside, made);
+    }
+  }
+  // Between two points on one input edge, and across its ends; none between two inputs.
+  const WaypointSource a{.path = 1, .index = 2, .t = 0.5};
+  EXPECT_EQ(SourceBetween(a, {.path = 1, .index = 3}, 0.5).t, 0.75);
+  EXPECT_EQ(SourceBetween({.path = 1, .index = 3}, a, 0.5).t, 0.75);
+  EXPECT_EQ(SourceBetween(a, {.path = 1, .index = 3}, 1.0).index, 3);
+  EXPECT_EQ(SourceBetween(a, {.path = 1, .index = 2, .t = 0.1}, 0.5).t, 0.3);
+  EXPECT_EQ(SourceBetween(a, {.path = 2, .index = 3}, 0.5).path, -1);
+  EXPECT_EQ(SourceBetween(a, {.path = 1, .index = 4}, 0.5).path, -1);
+}
+
 TEST_F(ShortcutTest, TheThreadCountDoesNotChangeTheResult) {
   ShortcutRequest request = Request();
   request.threads = 1;
