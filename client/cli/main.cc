@@ -28,8 +28,8 @@ int main(int argc, char** argv) {
   // them; those with no progress to hide (requery, check, ...) accept it and print as before.
   for (Subcommand& sub : subcommands) {
     if (sub.app->get_option_no_throw("--quiet") == nullptr) {
-      sub.app->add_flag("-q,--quiet")->description(
-          "No progress on stderr (this subcommand prints none)");
+      sub.app->add_flag("-q,--quiet")
+          ->description("No progress on stderr (this subcommand prints none)");
     }
   }
 

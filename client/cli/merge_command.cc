@@ -242,9 +242,10 @@ Subcommand AddMergeCommand(CLI::App& parent) {
                   "lines between paths)")
       ->required();
   app->add_option("--out", f.out, "Write the MergeResult JSON here");
-  app->add_option("--out-path", f.out_path,
-                  "Write the merged path here (.json: PathSet; .path: OMPL's PathGeometric printout, as "
-                  "OMPL.app's .path files; otherwise OMPL text, one configuration per line)");
+  app->add_option(
+      "--out-path", f.out_path,
+      "Write the merged path here (.json: PathSet; .path: OMPL's PathGeometric printout, as "
+      "OMPL.app's .path files; otherwise OMPL text, one configuration per line)");
   app->add_option("--svg", f.svg, "Draw the scene, the inputs and the merged path here (SVG)");
   app->add_option("--variant", f.variant,
                   "H-Graph variant: all-pairs, neighborhood, knn, edit-distance, "

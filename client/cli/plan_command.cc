@@ -192,8 +192,10 @@ Subcommand AddPlanCommand(CLI::App& parent) {
       "found in time (those found are still written).");
   app->add_option("--scene", f.scene, "Scene JSON (hgraph.v1.Scene) with start and goal")
       ->required();
-  app->add_option("--out", f.out, "Write the paths here (.json: PathSet; .path: OMPL's PathGeometric printout; otherwise "
-                  "OMPL text)");
+  app->add_option(
+      "--out", f.out,
+      "Write the paths here (.json: PathSet; .path: OMPL's PathGeometric printout; otherwise "
+      "OMPL text)");
   app->add_option("--planner", f.planner,
                   "prm (no cycles, as the paper), prm-cycles, prmstar, rrt, rrtconnect, lazyprm")
       ->capture_default_str();

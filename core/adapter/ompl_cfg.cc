@@ -176,9 +176,9 @@ v1::Scene ReadOmplAppProblem(const std::string& cfg_path) {
   const MeshFile robot = FindMesh(problem, "robot", dir);
   const auto world_mesh =
       LoadMeshFile(world.resolved, {.apply_node_transforms = true}, problem.Field("world"));
-  const auto robot_mesh = LoadMeshFile(
-      robot.resolved, {.apply_node_transforms = true, .ompl_app_center = true},
-      problem.Field("robot"));
+  const auto robot_mesh =
+      LoadMeshFile(robot.resolved, {.apply_node_transforms = true, .ompl_app_center = true},
+                   problem.Field("robot"));
   const Eigen::Matrix3d world_up = AssimpUpAxisRotation(world.resolved);
   const Eigen::Matrix3d robot_up = AssimpUpAxisRotation(robot.resolved);
 
@@ -343,15 +343,9 @@ void PrintLeaf(const char* name, const Config& q, int first, int count, std::str
 
 void PrintComponent(const ComponentSpec& c, const Config& q, int first, std::string& out) {
   switch (c.type) {
-    case ComponentType::kRealVector:
-      PrintLeaf("RealVector", q, first, c.dimension, out);
-      return;
-    case ComponentType::kSO2:
-      PrintLeaf("SO2", q, first, 1, out);
-      return;
-    case ComponentType::kSO3:
-      PrintLeaf("SO3", q, first, 4, out);
-      return;
+    case ComponentType::kRealVector: PrintLeaf("RealVector", q, first, c.dimension, out); return;
+    case ComponentType::kSO2: PrintLeaf("SO2", q, first, 1, out); return;
+    case ComponentType::kSO3: PrintLeaf("SO3", q, first, 4, out); return;
     case ComponentType::kSE2:
       out += "Compound state [\n";
       PrintLeaf("RealVector", q, first, 2, out);
@@ -376,8 +370,7 @@ std::string OmplStatePrint(const std::vector<InputPath>& paths, const Space& spa
     for (const Config& q : path.waypoints) {
       if (q.size() != space.dimension()) {
         throw InputError(path.name, "waypoint has " + std::to_string(q.size()) +
-                                        " numbers, the space " +
-                                        std::to_string(space.dimension()));
+                                        " numbers, the space " + std::to_string(space.dimension()));
       }
       if (space.num_components() == 1) {
         PrintComponent(space.component(0), q, 0, out);

@@ -31,8 +31,8 @@ constexpr unsigned kPostProcess = aiProcess_RemoveComponent | aiProcess_Triangul
 // OMPL.app's RigidBodyGeometry reads robot and environment meshes with these steps and default
 // importer settings; only its vertex mean is taken from such an import (ompl_app_center).
 constexpr unsigned kOmplAppPostProcess = aiProcess_GenNormals | aiProcess_Triangulate |
-                                         aiProcess_JoinIdenticalVertices |
-                                         aiProcess_SortByPType | aiProcess_OptimizeGraph;
+                                         aiProcess_JoinIdenticalVertices | aiProcess_SortByPType |
+                                         aiProcess_OptimizeGraph;
 
 void ConfigureImporter(Assimp::Importer& importer) {
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE,
@@ -129,8 +129,8 @@ void AppendNode(const aiScene& scene, const aiNode& node, const aiMatrix4x4& par
 }
 
 std::shared_ptr<Mesh> Convert(const aiScene* scene, const Assimp::Importer& importer,
-                                    const std::string& what, const MeshLoadOptions& options,
-                                    const std::string& field) {
+                              const std::string& what, const MeshLoadOptions& options,
+                              const std::string& field) {
   if (scene == nullptr) {
     throw InputError(field, "cannot parse mesh " + what + ": " + importer.GetErrorString());
   }
@@ -216,12 +216,13 @@ Eigen::Vector3d OmplAppCenter(const std::string& bytes, const std::string& name,
       count += mesh.mNumVertices;
     }
   }
-  if (count == 0) throw InputError(field, "mesh " + what + " has no vertices as OMPL.app imports it");
+  if (count == 0)
+    throw InputError(field, "mesh " + what + " has no vertices as OMPL.app imports it");
   sum /= static_cast<float>(count);
-  const Eigen::Vector3d center =
-      options.scale.cwiseProduct(Eigen::Vector3d(sum.x, sum.y, sum.z));
+  const Eigen::Vector3d center = options.scale.cwiseProduct(Eigen::Vector3d(sum.x, sum.y, sum.z));
   if (!center.allFinite()) {
-    throw InputError(field, "mesh " + what + " has a non-finite vertex mean as OMPL.app imports it");
+    throw InputError(field,
+                     "mesh " + what + " has a non-finite vertex mean as OMPL.app imports it");
   }
   return center;
 }
@@ -244,7 +245,8 @@ std::shared_ptr<const Mesh> Import(const std::string& bytes, const std::string& 
       throw InputError(field, "mesh " + what + ": " + e.what());
     }
   }
-  if (options.ompl_app_center) mesh->ompl_app_center = OmplAppCenter(bytes, name, what, options, field);
+  if (options.ompl_app_center)
+    mesh->ompl_app_center = OmplAppCenter(bytes, name, what, options, field);
   return mesh;
 }
 

@@ -298,8 +298,8 @@ TEST_F(MeshLoaderTest, OmplAppCenterCountsCornersOncePerNormal) {
 
   std::ifstream in(car, std::ios::binary);
   const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const auto scaled =
-      LoadMeshBytes(bytes, "dae", {.scale = Eigen::Vector3d(2, 1, 3), .ompl_app_center = true}, "m");
+  const auto scaled = LoadMeshBytes(
+      bytes, "dae", {.scale = Eigen::Vector3d(2, 1, 3), .ompl_app_center = true}, "m");
   ASSERT_TRUE(scaled->ompl_app_center.has_value());
   EXPECT_LT((*scaled->ompl_app_center - Eigen::Vector3d(2, 1, 3).cwiseProduct(ompl_app)).norm(),
             1e-6);
@@ -454,9 +454,9 @@ TEST(MeshWireTest, RoundTripsAndRefusesMalformedReplies) {
   Mesh nan_center = centered;
   nan_center.ompl_app_center->y() = std::numeric_limits<double>::infinity();
   EXPECT_EQ(DecodeMeshReply(EncodeMeshReply(nan_center), with_center).mesh, nullptr);
-  EXPECT_TRUE(DecodeMeshRequest(EncodeMeshRequest({.format = "dae", .options = with_center,
-                                                   .bytes = "x"}))
-                  .options.ompl_app_center);
+  EXPECT_TRUE(
+      DecodeMeshRequest(EncodeMeshRequest({.format = "dae", .options = with_center, .bytes = "x"}))
+          .options.ompl_app_center);
 
   const MeshImportRequest request{.format = "obj", .options = {}, .bytes = "v 0 0 0"};
   const MeshImportRequest back = DecodeMeshRequest(EncodeMeshRequest(request));

@@ -9,18 +9,18 @@
 // space's extent).
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <fcl/geometry/bvh/BVH_model.h>
+#include <fcl/math/bv/OBBRSS.h>
+#include <fcl/narrowphase/collision.h>
 #include <gtest/gtest.h>
 #include <ompl/base/SpaceInformation.h>
 #include <ompl/base/spaces/SE2StateSpace.h>
 #include <ompl/base/spaces/SE3StateSpace.h>
 #include <ompl/util/Console.h>
 
-#include <assimp/Importer.hpp>
 #include <algorithm>
+#include <assimp/Importer.hpp>
 #include <cmath>
-#include <fcl/geometry/bvh/BVH_model.h>
-#include <fcl/math/bv/OBBRSS.h>
-#include <fcl/narrowphase/collision.h>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -106,10 +106,9 @@ void Extract(const aiScene& scene, const aiNode& node, aiMatrix4x4 transform, Ap
 
 AppMesh ImportAsOmplApp(const std::string& path) {
   Assimp::Importer importer;
-  const aiScene* scene =
-      importer.ReadFile(path, aiProcess_GenNormals | aiProcess_Triangulate |
-                                  aiProcess_JoinIdenticalVertices | aiProcess_SortByPType |
-                                  aiProcess_OptimizeGraph);
+  const aiScene* scene = importer.ReadFile(
+      path, aiProcess_GenNormals | aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
+                aiProcess_SortByPType | aiProcess_OptimizeGraph);
   AppMesh mesh;
   if (scene == nullptr || !scene->HasMeshes()) {
     ADD_FAILURE() << path << ": " << importer.GetErrorString();

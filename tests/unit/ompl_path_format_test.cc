@@ -3,13 +3,13 @@
 // the same states, read back into OMPL states with OMPL's own copyFromReals; and what OMPL
 // prints, we read back as the same path.
 #include <gtest/gtest.h>
-#include <unistd.h>
 #include <ompl/base/ScopedState.h>
 #include <ompl/base/SpaceInformation.h>
 #include <ompl/base/spaces/SE2StateSpace.h>
 #include <ompl/base/spaces/SE3StateSpace.h>
 #include <ompl/geometric/PathGeometric.h>
 #include <ompl/util/Console.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
@@ -121,8 +121,8 @@ class OmplPathFormatTest : public testing::TestWithParam<Problem (*)()> {
  protected:
   static void SetUpTestSuite() { ompl::msg::setLogLevel(ompl::msg::LOG_WARN); }
   fs::path Dir() {
-    const fs::path dir = fs::path(testing::TempDir()) /
-                         ("hgraph_path_format_" + std::to_string(::getpid()));
+    const fs::path dir =
+        fs::path(testing::TempDir()) / ("hgraph_path_format_" + std::to_string(::getpid()));
     fs::create_directories(dir);
     return dir;
   }
