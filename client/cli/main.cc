@@ -1,5 +1,6 @@
 #include <cstdio>
 #include <exception>
+#include <string>
 #include <vector>
 
 #include "client/cli/command.h"
@@ -23,6 +24,14 @@ int main(int argc, char** argv) {
       AddAddPathsCommand(app),
       AddHealthCommand(app),
   };
+  // -q/--quiet is common to every subcommand, so that a script can pass the same flags to all of
+  // them; those with no progress to hide (requery, check, ...) accept it and print as before.
+  for (Subcommand& sub : subcommands) {
+    if (sub.app->get_option_no_throw("--quiet") == nullptr) {
+      sub.app->add_flag("-q,--quiet")
+          ->description("No progress on stderr (this subcommand prints none)");
+    }
+  }
 
   try {
     app.parse(argc, argv);

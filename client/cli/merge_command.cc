@@ -139,7 +139,9 @@ int RunMerge(const MergeFlags& f, const MergeRunner& run, std::optional<LoadedSc
   if (!f.out.empty()) WriteTextFile(f.out, ToJson(response.result));
   // --svg needs the scene, which this side holds: it is drawn here, from the result.
   const MergeResult result = MergeResultFromProto(response.result);
-  if (!f.out_path.empty()) WritePathsFile(f.out_path, {result.path});
+  if (!f.out_path.empty()) {
+    WritePathsFile(f.out_path, {result.path}, SpaceFromProto(scene_proto.space(), "scene.space"));
+  }
   if (!f.svg.empty()) {
     if (!*loaded) loaded->emplace(LoadScene(scene_proto, f.scene, resolution));
     WriteTextFile(f.svg, RenderSvg(*(*loaded)->scene, MergePicture(paths, result)));
@@ -240,8 +242,10 @@ Subcommand AddMergeCommand(CLI::App& parent) {
                   "lines between paths)")
       ->required();
   app->add_option("--out", f.out, "Write the MergeResult JSON here");
-  app->add_option("--out-path", f.out_path,
-                  "Write the merged path here (.json: PathSet; otherwise OMPL text)");
+  app->add_option(
+      "--out-path", f.out_path,
+      "Write the merged path here (.json: PathSet; .path: OMPL's PathGeometric printout, as "
+      "OMPL.app's .path files; otherwise OMPL text, one configuration per line)");
   app->add_option("--svg", f.svg, "Draw the scene, the inputs and the merged path here (SVG)");
   app->add_option("--variant", f.variant,
                   "H-Graph variant: all-pairs, neighborhood, knn, edit-distance, "

@@ -67,8 +67,9 @@ v1::PlanPathsRequest BuildRequest(const PlanFlags& f, const v1::Scene& scene, do
 
 // One line per requested path (found or not), the summary, and the exit code: 1 if fewer than
 // --count were found. The status column says only "found" or "not found", which both runs know.
-int PrintPlan(const PlanFlags& f, const v1::PlanPathsRequest& request, double straight,
-              const std::vector<PlanAttempt>& attempts, const std::vector<InputPath>& paths) {
+int PrintPlan(const PlanFlags& f, const v1::PlanPathsRequest& request, const Space& space,
+              double straight, const std::vector<PlanAttempt>& attempts,
+              const std::vector<InputPath>& paths) {
   int found = 0;
   std::string missing;
   for (const PlanAttempt& a : attempts) {
@@ -86,7 +87,7 @@ int PrintPlan(const PlanFlags& f, const v1::PlanPathsRequest& request, double st
   }
   // Nothing found, nothing written: a stale file from an earlier run would read as success.
   const bool write = !f.out.empty() && found > 0;
-  if (write) WritePathsFile(f.out, paths);
+  if (write) WritePathsFile(f.out, paths, space);
   std::printf("found %d of %d paths with %s in %g s each (seed %llu)%s%s\n", found, f.count,
               request.planner().c_str(), f.time_s, static_cast<unsigned long long>(f.seed),
               write ? "; wrote " : "", write ? f.out.c_str() : "");
@@ -130,7 +131,7 @@ int RunLocal(const PlanFlags& f) {
   for (const PlanAttempt& a : result.attempts) {
     if (!a.found) std::fprintf(stderr, "run %d: %s\n", a.index, a.status.c_str());
   }
-  return PrintPlan(f, proto, space.Distance(request.start, request.goal), result.attempts,
+  return PrintPlan(f, proto, space, space.Distance(request.start, request.goal), result.attempts,
                    result.paths);
 }
 
@@ -176,7 +177,7 @@ int RunRemote(const PlanFlags& f, const RemoteOptions& remote) {
   printer.Finish();
   const double straight =
       space.Distance(ConfigFromProto(scene_proto.start()), ConfigFromProto(scene_proto.goal()));
-  return PrintPlan(f, request, straight, attempts, paths);
+  return PrintPlan(f, request, space, straight, attempts, paths);
 }
 
 }  // namespace
@@ -191,7 +192,10 @@ Subcommand AddPlanCommand(CLI::App& parent) {
       "found in time (those found are still written).");
   app->add_option("--scene", f.scene, "Scene JSON (hgraph.v1.Scene) with start and goal")
       ->required();
-  app->add_option("--out", f.out, "Write the paths here (.json: PathSet; otherwise OMPL text)");
+  app->add_option(
+      "--out", f.out,
+      "Write the paths here (.json: PathSet; .path: OMPL's PathGeometric printout; otherwise "
+      "OMPL text)");
   app->add_option("--planner", f.planner,
                   "prm (no cycles, as the paper), prm-cycles, prmstar, rrt, rrtconnect, lazyprm")
       ->capture_default_str();

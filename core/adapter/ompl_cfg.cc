@@ -3,6 +3,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cctype>
+#include <charconv>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -173,15 +174,18 @@ v1::Scene ReadOmplAppProblem(const std::string& cfg_path) {
 
   const MeshFile world = FindMesh(problem, "world", dir);
   const MeshFile robot = FindMesh(problem, "robot", dir);
-  const MeshLoadOptions load{.apply_node_transforms = true};
-  const auto world_mesh = LoadMeshFile(world.resolved, load, problem.Field("world"));
-  const auto robot_mesh = LoadMeshFile(robot.resolved, load, problem.Field("robot"));
+  const auto world_mesh =
+      LoadMeshFile(world.resolved, {.apply_node_transforms = true}, problem.Field("world"));
+  const auto robot_mesh =
+      LoadMeshFile(robot.resolved, {.apply_node_transforms = true, .ompl_app_center = true},
+                   problem.Field("robot"));
   const Eigen::Matrix3d world_up = AssimpUpAxisRotation(world.resolved);
   const Eigen::Matrix3d robot_up = AssimpUpAxisRotation(robot.resolved);
 
-  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-  for (const Eigen::Vector3d& v : robot_mesh->vertices) centroid += robot_up * v;
-  centroid /= static_cast<double>(robot_mesh->vertices.size());
+  // OMPL.app's reference point, not the mean of our vertices: the two differ whenever corners
+  // are shared by faces of different normals (mesh_loader.h), and a configuration must place the
+  // robot where OMPL.app places it.
+  Eigen::Vector3d centroid = robot_up * robot_mesh->ompl_app_center.value();
   if (!three_d) centroid.z() = 0;  // OMPL.app's 2D robots keep their own height
 
   v1::Scene scene;
@@ -254,7 +258,8 @@ bool LooksLikeOmplStatePrint(const std::string& text) {
 
 std::vector<InputPath> ParseOmplStatePrint(const std::string& text, const std::string& source,
                                            const Space& space) {
-  InputPath path{.name = fs::path(source).stem().string()};
+  std::vector<InputPath> paths;
+  InputPath path;
   std::istringstream in(text);
   std::string line;
   std::vector<double> state;
@@ -276,7 +281,12 @@ std::vector<InputPath> ParseOmplStatePrint(const std::string& text, const std::s
     const size_t open = line.find('[');
     if (open == std::string::npos) {
       if (line == "]" && depth > 0 && --depth == 0) finish();
-      continue;  // "Geometric path with N states" and the like
+      // Each PathGeometric::print starts with this line; other lines without states are skipped.
+      if (depth == 0 && line.starts_with("Geometric path with") && !path.waypoints.empty()) {
+        paths.push_back(std::move(path));
+        path = InputPath();
+      }
+      continue;
     }
     if (depth == 0) state_line = line_no;
     const size_t close = line.rfind(']');
@@ -302,8 +312,79 @@ std::vector<InputPath> ParseOmplStatePrint(const std::string& text, const std::s
     }
     if (depth == 0) finish();
   }
-  if (path.waypoints.empty()) throw InputError(source, "no states found");
-  return {path};
+  if (!path.waypoints.empty()) paths.push_back(std::move(path));
+  if (paths.empty()) throw InputError(source, "no states found");
+  const std::string stem = fs::path(source).stem().string();
+  for (size_t i = 0; i < paths.size(); ++i) {
+    paths[i].name = paths.size() == 1 ? stem : stem + "-" + std::to_string(i);
+  }
+  return paths;
+}
+
+namespace {
+
+// Shortest decimal text that reads back as the same double.
+std::string Exact(double v) {
+  char buffer[32];
+  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), v);
+  return std::string(buffer, result.ptr);
+}
+
+// "<Name>State [a b c]\n", as RealVectorStateSpace, SO2StateSpace and SO3StateSpace print.
+void PrintLeaf(const char* name, const Config& q, int first, int count, std::string& out) {
+  out += name;
+  out += "State [";
+  for (int k = 0; k < count; ++k) {
+    if (k > 0) out += ' ';
+    out += Exact(q[first + k]);
+  }
+  out += "]\n";
+}
+
+void PrintComponent(const ComponentSpec& c, const Config& q, int first, std::string& out) {
+  switch (c.type) {
+    case ComponentType::kRealVector: PrintLeaf("RealVector", q, first, c.dimension, out); return;
+    case ComponentType::kSO2: PrintLeaf("SO2", q, first, 1, out); return;
+    case ComponentType::kSO3: PrintLeaf("SO3", q, first, 4, out); return;
+    case ComponentType::kSE2:
+      out += "Compound state [\n";
+      PrintLeaf("RealVector", q, first, 2, out);
+      PrintLeaf("SO2", q, first + 2, 1, out);
+      out += "]\n";
+      return;
+    case ComponentType::kSE3:
+      out += "Compound state [\n";
+      PrintLeaf("RealVector", q, first, 3, out);
+      PrintLeaf("SO3", q, first + 3, 4, out);
+      out += "]\n";
+      return;
+  }
+}
+
+}  // namespace
+
+std::string OmplStatePrint(const std::vector<InputPath>& paths, const Space& space) {
+  std::string out;
+  for (const InputPath& path : paths) {
+    out += "Geometric path with " + std::to_string(path.waypoints.size()) + " states\n";
+    for (const Config& q : path.waypoints) {
+      if (q.size() != space.dimension()) {
+        throw InputError(path.name, "waypoint has " + std::to_string(q.size()) +
+                                        " numbers, the space " + std::to_string(space.dimension()));
+      }
+      if (space.num_components() == 1) {
+        PrintComponent(space.component(0), q, 0, out);
+        continue;
+      }
+      out += "Compound state [\n";
+      for (int i = 0; i < space.num_components(); ++i) {
+        PrintComponent(space.component(i), q, space.offset(i), out);
+      }
+      out += "]\n";
+    }
+    out += "\n";  // PathGeometric::print ends with an empty line
+  }
+  return out;
 }
 
 }  // namespace hgraph

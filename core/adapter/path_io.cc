@@ -166,8 +166,15 @@ std::string PathsToText(const std::vector<InputPath>& paths) {
   return out;
 }
 
-void WritePathsFile(const std::string& path, const std::vector<InputPath>& paths) {
-  WriteTextFile(path, EndsWith(path, ".json") ? ToJson(PathsToProto(paths)) : PathsToText(paths));
+void WritePathsFile(const std::string& path, const std::vector<InputPath>& paths,
+                    const Space& space) {
+  if (EndsWith(path, ".json")) {
+    WriteTextFile(path, ToJson(PathsToProto(paths)));
+  } else if (EndsWith(path, ".path")) {
+    WriteTextFile(path, OmplStatePrint(paths, space));
+  } else {
+    WriteTextFile(path, PathsToText(paths));
+  }
 }
 
 }  // namespace hgraph

@@ -29,9 +29,12 @@ std::vector<InputPath> LoadPathsFile(const std::string& path, const Space& space
 std::vector<InputPath> ParsePathsText(const std::string& text, const std::string& source,
                                       const Space& space);
 
-// Writes a ".json" file as a PathSet, any other name in the text format (names become
-// "# <name>" comments). Numbers are printed with enough digits to read back exactly.
-void WritePathsFile(const std::string& path, const std::vector<InputPath>& paths);
+// Writes a ".json" file as a PathSet, a ".path" file as OMPL's PathGeometric printout in `space`
+// (the format of OMPL.app's .path files: OmplStatePrint in ompl_cfg.h; no names), any other name
+// in the text format (names become "# <name>" comments). Numbers are printed with enough digits
+// to read back exactly. LoadPathsFile reads each of them back as the same waypoints.
+void WritePathsFile(const std::string& path, const std::vector<InputPath>& paths,
+                    const Space& space);
 std::string PathsToText(const std::vector<InputPath>& paths);
 
 }  // namespace hgraph

@@ -28,6 +28,12 @@ namespace {
 constexpr unsigned kPostProcess = aiProcess_RemoveComponent | aiProcess_Triangulate |
                                   aiProcess_JoinIdenticalVertices | aiProcess_SortByPType;
 
+// OMPL.app's RigidBodyGeometry reads robot and environment meshes with these steps and default
+// importer settings; only its vertex mean is taken from such an import (ompl_app_center).
+constexpr unsigned kOmplAppPostProcess = aiProcess_GenNormals | aiProcess_Triangulate |
+                                         aiProcess_JoinIdenticalVertices | aiProcess_SortByPType |
+                                         aiProcess_OptimizeGraph;
+
 void ConfigureImporter(Assimp::Importer& importer) {
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE,
                               aiPrimitiveType_POINT | aiPrimitiveType_LINE);
@@ -59,6 +65,22 @@ bool WithinLimits(const aiScene& scene, const aiNode& node, int depth,
     }
   }
   return true;
+}
+
+// Sums the vertices under `node` as OMPL.app's scene::extractVertices and sceneCenter do: each
+// in single precision, transformed by the product of the node transforms from the root, added
+// to a single-precision sum. Copying that arithmetic makes the mean bit-identical to OMPL.app's.
+void SumVerticesAsOmplApp(const aiScene& scene, const aiNode& node, aiMatrix4x4 transform,
+                          aiVector3D& sum, uint64_t& count) {
+  transform *= node.mTransformation;
+  for (unsigned i = 0; i < node.mNumMeshes; ++i) {
+    const aiMesh& mesh = *scene.mMeshes[node.mMeshes[i]];
+    for (unsigned k = 0; k < mesh.mNumVertices; ++k) sum += transform * mesh.mVertices[k];
+    count += mesh.mNumVertices;
+  }
+  for (unsigned c = 0; c < node.mNumChildren; ++c) {
+    SumVerticesAsOmplApp(scene, *node.mChildren[c], transform, sum, count);
+  }
 }
 
 }  // namespace
@@ -106,9 +128,9 @@ void AppendNode(const aiScene& scene, const aiNode& node, const aiMatrix4x4& par
   }
 }
 
-std::shared_ptr<const Mesh> Convert(const aiScene* scene, const Assimp::Importer& importer,
-                                    const std::string& what, const MeshLoadOptions& options,
-                                    const std::string& field) {
+std::shared_ptr<Mesh> Convert(const aiScene* scene, const Assimp::Importer& importer,
+                              const std::string& what, const MeshLoadOptions& options,
+                              const std::string& field) {
   if (scene == nullptr) {
     throw InputError(field, "cannot parse mesh " + what + ": " + importer.GetErrorString());
   }
@@ -150,21 +172,82 @@ std::shared_ptr<const Mesh> Convert(const aiScene* scene, const Assimp::Importer
   return mesh;
 }
 
+// Mesh::ompl_app_center from a second import of `bytes` with OMPL.app's steps. The COLLADA up
+// axis is ignored as in the first import, so that the point is in the frame of the mesh's
+// vertices; OMPL.app's frame differs from it by that rotation alone, which callers apply to both
+// (ompl_cfg.cc). GenNormals and the per-normal copies can multiply the vertices, so the limits
+// are checked again on this import.
+Eigen::Vector3d OmplAppCenter(const std::string& bytes, const std::string& name,
+                              const std::string& what, const MeshLoadOptions& options,
+                              const std::string& field) {
+  Assimp::Importer importer;
+  importer.SetPropertyBool(AI_CONFIG_IMPORT_COLLADA_IGNORE_UP_DIRECTION, true);
+  importer.SetIOHandler(new MemoryIOSystem({{name, &bytes}}));  // the importer owns it
+  const aiScene* scene = importer.ReadFile(name, kOmplAppPostProcess);
+  if (scene == nullptr || scene->mRootNode == nullptr || scene->mNumMeshes == 0) {
+    throw InputError(field, "cannot parse mesh " + what + " as OMPL.app does: " +
+                                (scene == nullptr ? std::string(importer.GetErrorString())
+                                                  : std::string("no meshes")));
+  }
+  int64_t vertices = 0;
+  int64_t triangles = 0;
+  bool within = true;
+  if (options.apply_node_transforms) {
+    within = WithinLimits(*scene, *scene->mRootNode, 0, options, vertices, triangles);
+  } else {
+    for (unsigned i = 0; i < scene->mNumMeshes && within; ++i) {
+      vertices += scene->mMeshes[i]->mNumVertices;
+      within = vertices <= options.max_vertices;
+    }
+  }
+  if (!within) {
+    throw InputError(field, "mesh " + what + " is too large as OMPL.app imports it: more than " +
+                                std::to_string(options.max_vertices) + " vertices or " +
+                                std::to_string(options.max_triangles) + " faces");
+  }
+  aiVector3D sum(0, 0, 0);
+  uint64_t count = 0;
+  if (options.apply_node_transforms) {
+    SumVerticesAsOmplApp(*scene, *scene->mRootNode, aiMatrix4x4(), sum, count);
+  } else {
+    for (unsigned i = 0; i < scene->mNumMeshes; ++i) {
+      const aiMesh& mesh = *scene->mMeshes[i];
+      for (unsigned k = 0; k < mesh.mNumVertices; ++k) sum += mesh.mVertices[k];
+      count += mesh.mNumVertices;
+    }
+  }
+  if (count == 0)
+    throw InputError(field, "mesh " + what + " has no vertices as OMPL.app imports it");
+  sum /= static_cast<float>(count);
+  const Eigen::Vector3d center = options.scale.cwiseProduct(Eigen::Vector3d(sum.x, sum.y, sum.z));
+  if (!center.allFinite()) {
+    throw InputError(field,
+                     "mesh " + what + " has a non-finite vertex mean as OMPL.app imports it");
+  }
+  return center;
+}
+
 // Imports `bytes` as the file `name` through a MemoryIOSystem that serves nothing else.
 std::shared_ptr<const Mesh> Import(const std::string& bytes, const std::string& name,
                                    const std::string& what, const MeshLoadOptions& options,
                                    const std::string& field) {
   PrescanMeshBytes(bytes, field);
-  Assimp::Importer importer;
-  ConfigureImporter(importer);
-  importer.SetIOHandler(new MemoryIOSystem({{name, &bytes}}));  // the importer owns it
-  const aiScene* scene = importer.ReadFile(name, kPostProcess);
-  try {
-    return Convert(scene, importer, what, options, field);
-  } catch (const Error& e) {
-    if (!e.field().empty()) throw;
-    throw InputError(field, "mesh " + what + ": " + e.what());
+  std::shared_ptr<Mesh> mesh;
+  {
+    Assimp::Importer importer;
+    ConfigureImporter(importer);
+    importer.SetIOHandler(new MemoryIOSystem({{name, &bytes}}));  // the importer owns it
+    const aiScene* scene = importer.ReadFile(name, kPostProcess);
+    try {
+      mesh = Convert(scene, importer, what, options, field);
+    } catch (const Error& e) {
+      if (!e.field().empty()) throw;
+      throw InputError(field, "mesh " + what + ": " + e.what());
+    }
   }
+  if (options.ompl_app_center)
+    mesh->ompl_app_center = OmplAppCenter(bytes, name, what, options, field);
+  return mesh;
 }
 
 }  // namespace

@@ -25,6 +25,15 @@ struct MeshLoadOptions {
   // Larger meshes are refused (after node instancing, before copying them out of assimp).
   int64_t max_vertices = int64_t{1} << 23;
   int64_t max_triangles = int64_t{1} << 23;
+  // Also compute Mesh::ompl_app_center: the mean of the vertices as OMPL.app's own import leaves
+  // them (RigidBodyGeometry: aiProcess_GenNormals | Triangulate | JoinIdenticalVertices |
+  // SortByPType | OptimizeGraph, default importer settings, every mesh of every node). Normals
+  // are kept there, so a corner shared by faces of different normals counts once per normal,
+  // and points and lines count too; the mean therefore differs from that of `vertices` (joined
+  // by position alone) for most meshes that are not symmetric. It is the point OMPL.app puts at
+  // a configuration's position. A second assimp import of the same bytes, under the same
+  // limits, in the same process as the first (for a server: the importer child).
+  bool ompl_app_center = false;
 };
 
 // Throws InputError(field) unless every scale factor is positive and finite.

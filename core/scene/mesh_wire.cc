@@ -8,7 +8,7 @@
 namespace hgraph {
 namespace {
 
-constexpr uint32_t kVersion = 1;
+constexpr uint32_t kVersion = 2;
 constexpr size_t kMaxRefusalBytes = 1000;
 constexpr uint32_t kMaxHintBytes = 64;
 
@@ -58,6 +58,7 @@ std::string EncodeMeshRequest(const MeshImportRequest& request) {
   out += request.format;
   for (int k = 0; k < 3; ++k) Put<double>(out, request.options.scale[k]);
   Put<uint8_t>(out, request.options.apply_node_transforms ? 1 : 0);
+  Put<uint8_t>(out, request.options.ompl_app_center ? 1 : 0);
   Put<int64_t>(out, request.options.max_vertices);
   Put<int64_t>(out, request.options.max_triangles);
   Put<uint64_t>(out, request.bytes.size());
@@ -71,6 +72,7 @@ MeshImportRequest DecodeMeshRequest(const std::string& bytes) {
   uint32_t version = 0;
   uint32_t hint_len = 0;
   uint8_t transforms = 0;
+  uint8_t center = 0;
   uint64_t mesh_len = 0;
   if (!in.Magic("HGMQ") || !in.Get(&version) || version != kVersion || !in.Get(&hint_len) ||
       hint_len > kMaxHintBytes || !in.Bytes(hint_len, &request.format)) {
@@ -79,12 +81,13 @@ MeshImportRequest DecodeMeshRequest(const std::string& bytes) {
   for (int k = 0; k < 3; ++k) {
     if (!in.Get(&request.options.scale[k])) throw InputError("", "malformed import request");
   }
-  if (!in.Get(&transforms) || !in.Get(&request.options.max_vertices) ||
+  if (!in.Get(&transforms) || !in.Get(&center) || !in.Get(&request.options.max_vertices) ||
       !in.Get(&request.options.max_triangles) || !in.Get(&mesh_len) ||
       !in.Bytes(mesh_len, &request.bytes) || in.left() != 0) {
     throw InputError("", "malformed import request");
   }
   request.options.apply_node_transforms = transforms != 0;
+  request.options.ompl_app_center = center != 0;
   return request;
 }
 
@@ -101,6 +104,10 @@ std::string EncodeMeshReply(const Mesh& mesh) {
   for (const Eigen::Vector3i& t : mesh.triangles) {
     for (int k = 0; k < 3; ++k) Put<uint32_t>(out, static_cast<uint32_t>(t[k]));
   }
+  Put<uint8_t>(out, mesh.ompl_app_center ? 1 : 0);
+  if (mesh.ompl_app_center) {
+    for (int k = 0; k < 3; ++k) Put<double>(out, (*mesh.ompl_app_center)[k]);
+  }
   return out;
 }
 
@@ -115,7 +122,7 @@ std::string EncodeMeshRefusal(const std::string& message) {
 }
 
 uint64_t MaxMeshReplyBytes(const MeshLoadOptions& limits) {
-  return 32 + static_cast<uint64_t>(limits.max_vertices) * 24 +
+  return 32 + 25 + static_cast<uint64_t>(limits.max_vertices) * 24 +
          static_cast<uint64_t>(limits.max_triangles) * 12 + kMaxRefusalBytes;
 }
 
@@ -150,7 +157,8 @@ MeshReply DecodeMeshReply(const std::string& bytes, const MeshLoadOptions& limit
                       std::to_string(triangles) + " triangles)";
     return reply;
   }
-  if (in.left() != vertices * 24 + triangles * 12) {
+  const uint64_t center_bytes = limits.ompl_app_center ? 25 : 1;
+  if (in.left() != vertices * 24 + triangles * 12 + center_bytes) {
     reply.malformed = "a length that does not match its counts";
     return reply;
   }
@@ -174,6 +182,22 @@ MeshReply DecodeMeshReply(const std::string& bytes, const MeshLoadOptions& limit
       }
       mesh->triangles[i][k] = static_cast<int>(index);
     }
+  }
+  // A center is in the reply exactly when the request asked for one.
+  uint8_t has_center = 0;
+  in.Get(&has_center);
+  if (has_center != (limits.ompl_app_center ? 1 : 0)) {
+    reply.malformed = limits.ompl_app_center ? "no OMPL.app center" : "an unasked-for center";
+    return reply;
+  }
+  if (has_center) {
+    Eigen::Vector3d center;
+    for (int k = 0; k < 3; ++k) in.Get(&center[k]);
+    if (!center.allFinite()) {
+      reply.malformed = "a non-finite OMPL.app center";
+      return reply;
+    }
+    mesh->ompl_app_center = center;
   }
   reply.mesh = std::move(mesh);
   return reply;

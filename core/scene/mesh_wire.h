@@ -4,9 +4,10 @@
 // counts against the byte length, vertex indices against the vertex count, and finiteness.
 //
 //   request: "HGMQ" u32:version  u32:hint_len hint  f64[3]:scale  u8:node_transforms
-//            i64:max_vertices  i64:max_triangles  u64:mesh_len mesh
+//            u8:ompl_app_center  i64:max_vertices  i64:max_triangles  u64:mesh_len mesh
 //   reply:   "HGMR" u32:version  u32:status (0 ok, 1 refused)
 //            ok:      u64:vertices u64:triangles f64[3*vertices] u32[3*triangles]
+//                     u8:has_center [f64[3]:center]  (a center exactly when one was asked for)
 //            refused: u32:message_len message
 #pragma once
 
@@ -36,6 +37,8 @@ std::string EncodeMeshRefusal(const std::string& message);
 // The largest reply a request with these limits can answer with.
 uint64_t MaxMeshReplyBytes(const MeshLoadOptions& limits);
 
+// `limits` are the request's options: their counts bound the reply, and ompl_app_center says
+// whether it must carry a center.
 // Result of decoding a reply: a mesh, or the child's refusal, or (mesh null, refused empty) a
 // malformed reply described in `malformed`.
 struct MeshReply {

@@ -19,6 +19,9 @@ namespace hgraph {
 struct Mesh {
   std::vector<Eigen::Vector3d> vertices;
   std::vector<Eigen::Vector3i> triangles;
+  // OMPL.app's reference point of this mesh as a robot (MeshLoadOptions::ompl_app_center), in
+  // the frame and scale of `vertices`; unset unless asked for.
+  std::optional<Eigen::Vector3d> ompl_app_center;
 };
 
 enum class ShapeType { kMesh, kBox, kSphere, kCylinder };

@@ -330,7 +330,7 @@ Problem LoadProblem(const std::string& name, const std::string& file, const fs::
     p.inputs = plan.paths;
     if (p.inputs.empty()) throw InputError("scene", name + ": PRM found no path");
     fs::create_directories(inputs_file.parent_path());
-    WritePathsFile(inputs_file.string(), p.inputs);
+    WritePathsFile(inputs_file.string(), p.inputs, p.scene->space);
     std::cerr << name << ": planned " << p.inputs.size() << " of " << count
               << " inputs, written to " << inputs_file << "\n";
   }

@@ -150,6 +150,34 @@ def check_path_valid(env, waypoints, name):
     expect("valid" in proc.stdout, "check printed no verdict")
 
 
+SUBCOMMANDS = ["merge", "check", "plan", "render", "import-cfg", "requery", "add-paths", "health"]
+
+
+@case
+def every_subcommand_takes_quiet(env):
+    """-q/--quiet is a common flag: every subcommand lists it, and `requery -q` (once refused
+    with "argument was not expected") prints what `requery` prints."""
+    for sub in SUBCOMMANDS:
+        proc = env.run(sub, "--help")
+        expect(proc.returncode == 0, "%s --help: exit %d" % (sub, proc.returncode))
+        expect("-q,--quiet" in proc.stdout, "%s does not list -q,--quiet" % sub)
+    with env.server() as server:
+        merged = env.run("merge", "-q", "--server", server.target, "--scene", env.scene,
+                         "--paths", env.paths)
+        expect(merged.returncode == 0, "merge failed: exit %d" % merged.returncode)
+        hgraph = re.search(r"^hgraph (sessions/[0-9a-f]+/hgraphs/\S+)", merged.stdout,
+                           re.M).group(1)
+        loud = env.run("requery", "--server", server.target, "--hgraph", hgraph, "--measure",
+                       "length")
+        quiet = env.run("requery", "-q", "--server", server.target, "--hgraph", hgraph,
+                        "--measure", "length")
+        expect(loud.returncode == 0, "requery failed: exit %d" % loud.returncode)
+        expect(quiet.returncode == 0, "requery -q failed: exit %d: %s" %
+               (quiet.returncode, quiet.stderr))
+        expect("not expected" not in quiet.stderr, "requery -q refused: %s" % quiet.stderr)
+        expect(quiet.stdout == loud.stdout, "requery -q printed another result")
+
+
 @case
 def merge_circles_shorter_than_both(env):
     proc = env.run("merge", "--scene", env.scene, "--paths", env.paths, "--out", "result.json",

@@ -426,7 +426,7 @@ TEST(AdapterTest, PathsFileRoundTripsInBothFormats) {
                         Eigen::Vector2d(9.999999999999, 5)};
   for (const std::string name : {"paths.json", "paths.txt"}) {
     const std::string file = (dir.path() / name).string();
-    WritePathsFile(file, paths);
+    WritePathsFile(file, paths, space);
     const std::vector<InputPath> back = LoadPathsFile(file, space);
     ASSERT_EQ(back.size(), 2u) << name;
     for (size_t p = 0; p < 2; ++p) {

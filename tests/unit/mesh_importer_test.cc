@@ -8,6 +8,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 
 #include "core/common/error.h"
@@ -37,6 +38,24 @@ TEST(MeshImporterTest, ImportsInAChildProcess) {
   EXPECT_EQ(mesh->vertices.size(), 4u);
   EXPECT_EQ(mesh->triangles.size(), 4u);
   EXPECT_EQ(mesh->vertices[1], Eigen::Vector3d(2, 0, 0));
+}
+
+// The OMPL.app reference point comes from the child too, from the same bytes, the same as an
+// import in this process computes it.
+TEST(MeshImporterTest, ComputesTheOmplAppCenterInTheChild) {
+  const std::string car = std::string(HGRAPH_SOURCE_DIR) + "/tests/data/ompl_app_car/car_robot.dae";
+  std::ifstream in(car, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const MeshImporter importer({.helper_path = kHelper});
+  const MeshLoadOptions options{.ompl_app_center = true};
+  const auto child = importer.Import(bytes, "dae", options, "robot", {});
+  const auto here = LoadMeshBytes(bytes, "dae", options, "robot");
+  ASSERT_TRUE(child->ompl_app_center.has_value());
+  EXPECT_EQ(child->ompl_app_center, here->ompl_app_center);
+  EXPECT_LT((*child->ompl_app_center - Eigen::Vector3d(0.5 + 6.0 / 65, 0, 0.25 - 2.0 / 13)).norm(),
+            1e-6);
+  EXPECT_EQ(child->vertices, here->vertices);
+  EXPECT_FALSE(importer.Import(bytes, "dae", {}, "robot", {})->ompl_app_center.has_value());
 }
 
 TEST(MeshImporterTest, ReportsTheChildsRefusalAndCrash) {

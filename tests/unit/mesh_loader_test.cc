@@ -8,6 +8,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <sstream>
 #include <string>
@@ -277,6 +278,36 @@ TEST_F(MeshLoaderTest, LoadsFromBytes) {
   ExpectBounds(*scaled, Eigen::Vector3d::Zero(), Eigen::Vector3d(2, 2, 2));
 }
 
+// tests/data/ompl_app_car/car_robot.dae writes a normal per face (make_car_problem.py): OMPL.app's
+// import keeps 52 (position, normal) vertices, ours 20 positions, and the means differ. In the
+// file's own frame (Z_UP kept) the car lies in XZ and the node moves it by (0.5, 0, 0.25).
+TEST_F(MeshLoaderTest, OmplAppCenterCountsCornersOncePerNormal) {
+  const std::string car = std::string(HGRAPH_SOURCE_DIR) + "/tests/data/ompl_app_car/car_robot.dae";
+  const Eigen::Vector3d ompl_app(0.5 + 6.0 / 65, 0, 0.25 - 2.0 / 13);
+  const auto plain = LoadMeshFile(car, {}, "robot");
+  EXPECT_FALSE(plain->ompl_app_center.has_value()) << "only computed when asked for";
+  ASSERT_EQ(plain->vertices.size(), 20u);
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& v : plain->vertices) mean += v / 20;
+  EXPECT_LT((mean - Eigen::Vector3d(0.56, 0, 0.05)).norm(), 1e-6) << mean.transpose();
+
+  const auto mesh = LoadMeshFile(car, {.ompl_app_center = true}, "robot");
+  ASSERT_TRUE(mesh->ompl_app_center.has_value());
+  EXPECT_LT((*mesh->ompl_app_center - ompl_app).norm(), 1e-6) << mesh->ompl_app_center->transpose();
+  EXPECT_EQ(mesh->vertices, plain->vertices) << "the collision model stays ours";
+
+  std::ifstream in(car, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto scaled = LoadMeshBytes(
+      bytes, "dae", {.scale = Eigen::Vector3d(2, 1, 3), .ompl_app_center = true}, "m");
+  ASSERT_TRUE(scaled->ompl_app_center.has_value());
+  EXPECT_LT((*scaled->ompl_app_center - Eigen::Vector3d(2, 1, 3).cwiseProduct(ompl_app)).norm(),
+            1e-6);
+  // A box written with per-face normals keeps every corner three times: the same mean.
+  const auto cube = LoadMeshFile(Write("cube.dae", CubeDae("")), {.ompl_app_center = true}, "m");
+  EXPECT_LT((*cube->ompl_app_center - Eigen::Vector3d::Constant(0.5)).norm(), 1e-6);
+}
+
 TEST_F(MeshLoaderTest, MissingFileIsNotFoundAndNamesTheField) {
   const std::string path = (dir_ / "absent.obj").string();
   try {
@@ -409,6 +440,23 @@ TEST(MeshWireTest, RoundTripsAndRefusesMalformedReplies) {
     EXPECT_FALSE(reply.malformed.empty());
   }
   EXPECT_EQ(DecodeMeshReply(good, {.max_vertices = 2}).mesh, nullptr);
+
+  // The OMPL.app center travels with the mesh exactly when the request asked for it.
+  Mesh centered = mesh;
+  centered.ompl_app_center = Eigen::Vector3d(0.25, -1, 3);
+  const MeshLoadOptions with_center{.ompl_app_center = true};
+  const MeshReply c = DecodeMeshReply(EncodeMeshReply(centered), with_center);
+  ASSERT_NE(c.mesh, nullptr) << c.malformed;
+  EXPECT_EQ(c.mesh->ompl_app_center, centered.ompl_app_center);
+  EXPECT_FALSE(ok.mesh->ompl_app_center.has_value());
+  EXPECT_EQ(DecodeMeshReply(good, with_center).mesh, nullptr) << "asked for, missing";
+  EXPECT_EQ(DecodeMeshReply(EncodeMeshReply(centered), limits).mesh, nullptr) << "not asked for";
+  Mesh nan_center = centered;
+  nan_center.ompl_app_center->y() = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(DecodeMeshReply(EncodeMeshReply(nan_center), with_center).mesh, nullptr);
+  EXPECT_TRUE(
+      DecodeMeshRequest(EncodeMeshRequest({.format = "dae", .options = with_center, .bytes = "x"}))
+          .options.ompl_app_center);
 
   const MeshImportRequest request{.format = "obj", .options = {}, .bytes = "v 0 0 0"};
   const MeshImportRequest back = DecodeMeshRequest(EncodeMeshRequest(request));

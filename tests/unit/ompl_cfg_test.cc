@@ -101,6 +101,25 @@ TEST(OmplCfgTest, PlanarProblemFollowsOmplAppConventions) {
   ExpectNear(robot.hi - robot.lo, Eigen::Vector3d(0.6, 0.3, 0.2), "robot size");
 }
 
+// The car's body has corners shared by faces of different normals (make_car_problem.py): OMPL.app
+// keeps each of its 10 outline corners once per normal, top or bottom and two flanks (3 copies),
+// and each of its 4 flank-split corners on the right flank twice, 52 vertices; their mean lies
+// at (6/65, -2/13) from the outline's origin, not at the mean of the 20 distinct positions,
+// (0.06, -0.2). The node moves the car by (0.5, 0.25). The configuration is OMPL.app's point.
+TEST(OmplCfgTest, ReferencePointIsOmplAppsWhenCornersHaveSeveralNormals) {
+  const std::string dir = std::string(HGRAPH_SOURCE_DIR) + "/tests/data/ompl_app_car";
+  const Eigen::Vector3d ompl_app(0.5 + 6.0 / 65, 0.25 - 2.0 / 13, 0);
+  const Eigen::Vector3d distinct_positions(0.56, 0.05, 0);
+  for (const char* cfg : {"car_planar.cfg", "car_3d.cfg"}) {
+    SCOPED_TRACE(cfg);
+    const v1::Scene proto = ReadOmplAppProblem(dir + "/" + cfg);
+    const auto scene = SceneFromProto(proto, dir, BlobResolver());
+    const Eigen::Vector3d shift = -scene->robot[0].offset.translation();
+    EXPECT_LT((shift - ompl_app).norm(), 1e-6) << shift.transpose();
+    EXPECT_GT((shift - distinct_positions).norm(), 0.05) << "the mean of distinct positions";
+  }
+}
+
 // Scenes are content-addressed by their serialization: the imported problem and its JSON file
 // must be the same message, bit for bit (JSON reads -0 back as 0, for one).
 TEST(OmplCfgTest, ImportedSceneSurvivesItsJsonRoundTrip) {
@@ -219,7 +238,7 @@ TEST_F(OmplCfg3dTest, OmplPathFilesReadBack) {
   path.waypoints = {Eigen::Vector3d(-3, 2, 0), Eigen::Vector3d(0, 0, 0.25),
                     Eigen::Vector3d(3, -2, 1.5707963267949)};
   const std::string file = (dir_ / "p.path").string();
-  WritePathsFile(file, {path});
+  WritePathsFile(file, {path}, se2);
   const auto read = LoadPathsFile(file, se2);
   ASSERT_EQ(read.size(), 1u);
   ASSERT_EQ(read[0].waypoints.size(), 3u);
