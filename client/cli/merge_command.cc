@@ -148,8 +148,8 @@ int RunMerge(const MergeFlags& f, const MergeRunner& run, std::optional<LoadedSc
     {
       std::lock_guard lock(records_mutex);
       const v1::ProgressRecord* last = records.empty() ? nullptr : &records[records.size() - 1];
-      const bool keep = last == nullptr || last->phase() != p.phase ||
-                        !std::isnan(p.objective) || (p.total > 0 && p.done == p.total) ||
+      const bool keep = last == nullptr || last->phase() != p.phase || !std::isnan(p.objective) ||
+                        (p.total > 0 && p.done == p.total) ||
                         p.elapsed_ms - last->elapsed_ms() >= kRecordIntervalMs;
       if (keep) {
         v1::ProgressRecord* r = records.Add();

@@ -73,9 +73,9 @@ PicturePaths LoadPicturePaths(const std::string& scene_file, v1::Scene scene_pro
     for (const auto& [field, size] : {std::pair{"source_path", result.source_path_size()},
                                       std::pair{"source_index", result.source_index_size()}}) {
       if (size != 0 && size != n) {
-        throw InputError(result_file + ": " + field,
-                         "has " + std::to_string(size) + " entries for a path of " +
-                             std::to_string(n) + " waypoints");
+        throw InputError(result_file + ": " + field, "has " + std::to_string(size) +
+                                                         " entries for a path of " +
+                                                         std::to_string(n) + " waypoints");
       }
     }
     out.merged = std::move(path);

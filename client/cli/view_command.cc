@@ -68,8 +68,8 @@ int RunView(const ViewFlags& f, const PathChecker& checker) {
     if (result.best_input() >= 0) request.best_input_objective = result.best_input_objective();
     for (const v1::ProgressRecord& p : result.progress()) {
       if (p.phase() != "optimize" || !p.has_objective()) continue;
-      request.rounds.push_back(
-          OptimizeRound{.round = p.done(), .elapsed_ms = p.elapsed_ms(), .objective = p.objective()});
+      request.rounds.push_back(OptimizeRound{
+          .round = p.done(), .elapsed_ms = p.elapsed_ms(), .objective = p.objective()});
     }
   }
   std::string html;

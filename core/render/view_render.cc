@@ -130,8 +130,8 @@ class ViewWriter {
 
   std::string Write() {
     Json data;
-    data["title"] = request_.title.empty() ? (scene_.name.empty() ? "scene" : scene_.name)
-                                           : request_.title;
+    data["title"] =
+        request_.title.empty() ? (scene_.name.empty() ? "scene" : scene_.name) : request_.title;
     data["planar"] = IsPlanar(scene_);
     data["robot_colour"] = kRobotColour;
     data["bounds"] = Bounds();
@@ -161,7 +161,7 @@ class ViewWriter {
     data["merged"] = nullptr;
     data["sources"] = Json::array();
     if (request_.merged) data["merged"] = MergedJson(&data["sources"]);
-    const InputPath* reference = request_.merged ? &request_.merged->path
+    const InputPath* reference = request_.merged           ? &request_.merged->path
                                  : request_.inputs.empty() ? nullptr
                                                            : &request_.inputs.front().path;
     std::optional<Config> start = scene_.start;
@@ -326,9 +326,8 @@ class ViewWriter {
     // Sources beyond the inputs given (a paths file with fewer paths than the merge had).
     for (int s : used) {
       if (s >= static_cast<int>(request_.inputs.size())) {
-        legend->push_back({{"label", "input " + std::to_string(s)},
-                           {"colour", StretchColour(s)},
-                           {"source", s}});
+        legend->push_back(
+            {{"label", "input " + std::to_string(s)}, {"colour", StretchColour(s)}, {"source", s}});
       }
     }
     if (used.count(kBridgeStretch) > 0) {
@@ -373,11 +372,13 @@ class ViewWriter {
     html += "</style>\n</head>\n<body>\n<canvas id=\"view\"></canvas>\n<div id=\"legend\"></div>\n";
     html += "<div id=\"chart\"></div>\n<div id=\"bar\">\n";
     html += "<button id=\"play\" type=\"button\">Play</button>\n";
-    html += "<input id=\"time\" type=\"range\" min=\"0\" max=\"1000\" value=\"0\" "
-            "aria-label=\"position along the path\">\n";
-    html += "<label>speed <select id=\"speed\"><option value=\"0.25\">0.25x</option>"
-            "<option value=\"0.5\">0.5x</option><option value=\"1\" selected>1x</option>"
-            "<option value=\"2\">2x</option><option value=\"4\">4x</option></select></label>\n";
+    html +=
+        "<input id=\"time\" type=\"range\" min=\"0\" max=\"1000\" value=\"0\" "
+        "aria-label=\"position along the path\">\n";
+    html +=
+        "<label>speed <select id=\"speed\"><option value=\"0.25\">0.25x</option>"
+        "<option value=\"0.5\">0.5x</option><option value=\"1\" selected>1x</option>"
+        "<option value=\"2\">2x</option><option value=\"4\">4x</option></select></label>\n";
     html += "<button id=\"home\" type=\"button\">Reset view</button>\n";
     html += "<label><input id=\"xray\" type=\"checkbox\"> see-through obstacles</label>\n</div>\n";
     html += "<script type=\"application/json\" id=\"hgraph-view-data\">";
@@ -436,8 +437,8 @@ std::string RenderViewHtml(const Scene& scene, const ViewRequest& request) {
     const size_t n = request.merged->path.waypoints.size();
     if (!request.sources.empty() && request.sources.size() != n) {
       throw InputError("request.sources", "has " + std::to_string(request.sources.size()) +
-                                              " entries for a merged path of " +
-                                              std::to_string(n) + " waypoints");
+                                              " entries for a merged path of " + std::to_string(n) +
+                                              " waypoints");
     }
   } else if (!request.sources.empty()) {
     throw InputError("request.sources", "given without a merged path");

@@ -1,6 +1,8 @@
 // The 3D view's document: which stretch of a merged path is whose, the data each path carries,
 // meshes written once and refused above the limit, text that cannot break out of the page, and
 // the errors. That a browser draws it is checked in tests/view (headless Chromium).
+#include "core/render/view_render.h"
+
 #include <gtest/gtest.h>
 
 #include <memory>
@@ -8,7 +10,6 @@
 #include <vector>
 
 #include "core/common/error.h"
-#include "core/render/view_render.h"
 
 namespace hgraph {
 namespace {
@@ -37,16 +38,17 @@ Scene TwoBodyScene() {
                                             .upper = Eigen::Vector3d(5, 5, 5)}})};
   const std::shared_ptr<const Mesh> mesh = Tetrahedron();
   for (double x : {-2.0, 2.0}) {
-    Obstacle o{.name = "tet", .shape = Shape{.type = ShapeType::kMesh, .mesh = mesh, .source = "tet.obj"}};
+    Obstacle o{.name = "tet",
+               .shape = Shape{.type = ShapeType::kMesh, .mesh = mesh, .source = "tet.obj"}};
     o.pose.translation() = Eigen::Vector3d(x, 0, 0);
     scene.obstacles.push_back(o);
   }
   scene.robot.push_back(RobotBody{
       .name = "a", .shape = Shape{.type = ShapeType::kBox, .box_size = Eigen::Vector3d(1, 1, 1)}});
-  scene.robot.push_back(RobotBody{
-      .name = "b",
-      .shape = Shape{.type = ShapeType::kCylinder, .radius = 0.3, .length = 1},
-      .component = 1});
+  scene.robot.push_back(
+      RobotBody{.name = "b",
+                .shape = Shape{.type = ShapeType::kCylinder, .radius = 0.3, .length = 1},
+                .component = 1});
   return scene;
 }
 
@@ -58,25 +60,25 @@ Config TwoBodies(double x1, double x2) {
 
 TEST(ViewRenderTest, StretchesAreNamedByInputBridgeAndShortcut) {
   const std::vector<WaypointSource> sources = {
-      {.path = 0, .index = 0},  {.path = 0, .index = 1},  // input 0's edge 0
-      {.path = 0, .index = 1, .fraction = 0.5},           // on its edge 1 (subdivision)
-      {.path = 1, .index = 4},                            // a bridge to input 1
-      {.path = 1, .index = 3},                            // input 1's edge 3, backwards
-      {.path = -1, .index = -1},                          // a shortcut's end
-      {.path = 1, .index = 9},                            // from the shortcut
-      {.path = 1, .index = 7},                            // two edges apart: a bridge
+      {.path = 0, .index = 0},
+      {.path = 0, .index = 1},                   // input 0's edge 0
+      {.path = 0, .index = 1, .fraction = 0.5},  // on its edge 1 (subdivision)
+      {.path = 1, .index = 4},                   // a bridge to input 1
+      {.path = 1, .index = 3},                   // input 1's edge 3, backwards
+      {.path = -1, .index = -1},                 // a shortcut's end
+      {.path = 1, .index = 9},                   // from the shortcut
+      {.path = 1, .index = 7},                   // two edges apart: a bridge
   };
-  EXPECT_EQ(StretchSources(sources),
-            (std::vector<int>{0, 0, kBridgeStretch, 1, kShortcutStretch, kShortcutStretch,
-                              kBridgeStretch}));
+  EXPECT_EQ(StretchSources(sources), (std::vector<int>{0, 0, kBridgeStretch, 1, kShortcutStretch,
+                                                       kShortcutStretch, kBridgeStretch}));
   EXPECT_TRUE(StretchSources({}).empty());
 }
 
 TEST(ViewRenderTest, DocumentCarriesEveryPathAndEachMeshOnce) {
   const Scene scene = TwoBodyScene();
   ViewRequest request;
-  request.inputs.push_back(
-      RenderPath{.path = InputPath{.name = "in0", .waypoints = {TwoBodies(-4, -3), TwoBodies(4, 3)}}});
+  request.inputs.push_back(RenderPath{
+      .path = InputPath{.name = "in0", .waypoints = {TwoBodies(-4, -3), TwoBodies(4, 3)}}});
   request.merged = RenderPath{
       .path = InputPath{.name = "merged",
                         .waypoints = {TwoBodies(-4, -3), TwoBodies(0, 0), TwoBodies(4, 3)}}};
@@ -104,8 +106,8 @@ TEST(ViewRenderTest, NamesCannotEndTheDataScript) {
   Scene scene = TwoBodyScene();
   scene.obstacles[0].name = "</script><script>alert(1)</script>";
   ViewRequest request;
-  request.inputs.push_back(
-      RenderPath{.path = InputPath{.name = "<b>", .waypoints = {TwoBodies(0, 0), TwoBodies(1, 1)}}});
+  request.inputs.push_back(RenderPath{
+      .path = InputPath{.name = "<b>", .waypoints = {TwoBodies(0, 0), TwoBodies(1, 1)}}});
   const std::string html = RenderViewHtml(scene, request);
   EXPECT_EQ(html.find("alert(1)</script>"), std::string::npos);
   EXPECT_NE(html.find("\\u003c/script>\\u003cscript>alert(1)"), std::string::npos);
