@@ -454,8 +454,8 @@ def merge_out_keeps_progress_local_and_remote(env):
             expect(proc.returncode == 0, "merge (%s) failed: exit %d" % (where, proc.returncode))
             result = json.loads((env.work / (where + ".json")).read_text())
             phases = [p["phase"] for p in result["progress"]]
-            expect("check" in phases and "search" in phases,
-                   "%s: the result kept no check and search events: %r" % (where, set(phases)))
+            expect("check" in phases and "optimize" in phases,
+                   "%s: the result kept no check and optimize events: %r" % (where, set(phases)))
             events = optimize_events(result)
             expect(events, "%s: the result kept no post-optimization objective" % where)
             # The first objective is the H-Graph optimum's, the last the result's.
