@@ -76,15 +76,15 @@ int RunView(const ViewFlags& f, const PathChecker& checker) {
   try {
     html = RenderViewHtml(*scene, request);
   } catch (const InputError& e) {
-    // The scene's fields are named after the scene file; the limit after its flag.
+    const std::string what = e.what();
+    const std::string message = e.field().empty() ? what : what.substr(e.field().size() + 2);
+    // The scene's fields are named after the scene file, the request's after their flags.
     if (e.field().rfind("scene.", 0) == 0) {
-      const std::string what = e.what();
-      throw InputError(f.scene + ": " + e.field().substr(6),
-                       what.substr(e.field().size() + 2) + " (--max-mesh-triangles)");
+      throw InputError(f.scene + ": " + e.field().substr(6), message + " (--max-mesh-triangles)");
     }
-    if (e.field() == "request.frames") throw InputError("--frames", e.what());
+    if (e.field() == "request.frames") throw InputError("--frames", message);
     if (e.field() == "request.max_mesh_triangles") {
-      throw InputError("--max-mesh-triangles", e.what());
+      throw InputError("--max-mesh-triangles", message);
     }
     throw;
   }

@@ -496,6 +496,20 @@ def view_writes_one_offline_file(env):
 
 
 @case
+def view_server_equals_in_process(env):
+    # The inputs' legend numbers come from a check: in process, or by the service's CheckPaths.
+    with env.server() as server:
+        local = env.run("view", "--scene", env.scene, "--paths", through_disc(env), "--out",
+                        "local.html")
+        remote = env.run("view", "--server", server.target, "--scene", env.scene, "--paths",
+                         through_disc(env), "--out", "remote.html")
+    expect(local.returncode == 0 and remote.returncode == 0, "view failed")
+    html = (env.work / "local.html").read_text()
+    expect((env.work / "remote.html").read_text() == html, "the views differ")
+    expect('"name":"through (invalid)"' in html, "the invalid path is not marked")
+
+
+@case
 def view_errors_name_file_and_field(env):
     paths = env.circle_paths()
     paths[0][1] = paths[0][1] + [0.0]
@@ -526,10 +540,14 @@ def view_errors_name_file_and_field(env):
     proc = env.run("view", "--scene", scene, "--paths", env.paths, "--out", "v.html",
                    "--max-mesh-triangles", "10")
     env.expect_bad_input(proc, "scene.json: obstacles[70]")
+    expect("188 triangles" in proc.stderr, "the mesh's size is not named: %r" % proc.stderr)
     expect("wrench.obj" in proc.stderr and "--max-mesh-triangles" in proc.stderr,
            "the mesh or the flag is not named: %r" % proc.stderr)
     proc = env.run("view", "--scene", scene, "--paths", env.paths, "--out", "v.html")
     expect(proc.returncode == 0, "the mesh scene under the default limit failed")
+    proc = env.run("view", "--scene", scene, "--paths", env.paths, "--out", "v.html", "--frames",
+                   "1")
+    env.expect_bad_input(proc, "--frames: must be in [2, 100000]")
 
 
 @case
