@@ -242,6 +242,15 @@
       }
     }
     play.addEventListener('click', () => setPlaying(!playing));
+    window.addEventListener('keydown', (e) => {
+      if (e.target instanceof HTMLInputElement || e.target instanceof HTMLSelectElement) return;
+      if (e.key === ' ') { e.preventDefault(); setPlaying(!playing); }
+      if (e.key === 'ArrowRight' || e.key === 'ArrowLeft') {
+        setPlaying(false);
+        time = Math.min(1, Math.max(0, time + (e.key === 'ArrowRight' ? 0.01 : -0.01)));
+        draw();
+      }
+    });
     slider.addEventListener('input', () => { time = Number(slider.value) / 1000; draw(); });
     speedSelect.addEventListener('change', () => { speed = Number(speedSelect.value); });
     document.getElementById('home').addEventListener('click', () => { homeView(); draw(); });
