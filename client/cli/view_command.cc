@@ -63,6 +63,9 @@ int RunView(const ViewFlags& f, const PathChecker& checker) {
           .index = result.source_index(i),
           .fraction = i < result.source_fraction_size() ? result.source_fraction(i) : 0.0});
     }
+    for (const v1::InputReport& input : result.inputs()) {
+      request.input_waypoints.push_back(input.waypoints());
+    }
     request.measure = MeasureLabel(result.measure());
     request.objective = result.objective();
     if (result.best_input() >= 0) request.best_input_objective = result.best_input_objective();

@@ -310,7 +310,7 @@ class ViewWriter {
     if (request_.sources.empty()) {
       stretches.assign(n > 0 ? n - 1 : 0, std::numeric_limits<int>::min());
     } else {
-      stretches = StretchSources(request_.sources);
+      stretches = StretchSources(request_.sources, request_.input_waypoints);
     }
     std::set<int> used(stretches.begin(), stretches.end());
     Json colours = Json::array();
@@ -400,14 +400,35 @@ class ViewWriter {
 
 }  // namespace
 
-std::vector<int> StretchSources(const std::vector<WaypointSource>& sources) {
+std::vector<int> StretchSources(const std::vector<WaypointSource>& sources,
+                                const std::vector<int>& input_waypoints) {
+  // `end` moved onto input `path` when it is the shared start or goal, else unchanged.
+  const auto on_input = [&](WaypointSource end, int path) {
+    if (end.path == path || end.fraction != 0) return end;
+    const auto count = [&](int p) {
+      return p >= 0 && p < static_cast<int>(input_waypoints.size()) ? input_waypoints[p] : -1;
+    };
+    if (end.index == 0) return WaypointSource{.path = path, .index = 0};
+    if (count(end.path) > 0 && end.index == count(end.path) - 1 && count(path) > 0) {
+      return WaypointSource{.path = path, .index = count(path) - 1};
+    }
+    return end;
+  };
   std::vector<int> stretches;
   for (size_t i = 0; i + 1 < sources.size(); ++i) {
-    const WaypointSource& a = sources[i];
-    const WaypointSource& b = sources[i + 1];
+    WaypointSource a = sources[i];
+    WaypointSource b = sources[i + 1];
     if (a.path < 0 || b.path < 0) {
       stretches.push_back(kShortcutStretch);
       continue;
+    }
+    if (a.path != b.path) {
+      const WaypointSource a_on_b = on_input(a, b.path);
+      if (a_on_b.path == b.path) {
+        a = a_on_b;
+      } else {
+        b = on_input(b, a.path);
+      }
     }
     // On one edge of one input (either way round): both positions within [k, k + 1].
     const double pa = a.index + a.fraction;

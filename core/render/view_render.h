@@ -37,6 +37,10 @@ struct ViewRequest {
   // One per waypoint of `merged`, or empty when the result does not say (all stretches are then
   // drawn in one colour, "source not reported").
   std::vector<WaypointSource> sources;
+  // The number of waypoints of each of the merge's inputs (MergeResult.inputs[i].waypoints), in
+  // the order source paths count them; lets a stretch that leaves the shared start or reaches the
+  // shared goal count as the input it runs along, whichever input the endpoint is reported from.
+  std::vector<int> input_waypoints;
   // Names in the legend's measure line; empty: no measure line.
   std::string measure;
   std::optional<double> objective;
@@ -60,8 +64,11 @@ std::string RenderViewHtml(const Scene& scene, const ViewRequest& request);
 // The source of each stretch (waypoint i to i + 1) of a merged path: the input index when both
 // ends lie on one edge of that input, kShortcutStretch when either end is a shortcut's
 // (source path -1), kBridgeStretch when they lie on different inputs or on distant parts of one.
+// Inputs share their start and goal, so an end at an input's first waypoint (or, with
+// `input_waypoints`, its last) lies on every input.
 inline constexpr int kShortcutStretch = -1;
 inline constexpr int kBridgeStretch = -2;
-std::vector<int> StretchSources(const std::vector<WaypointSource>& sources);
+std::vector<int> StretchSources(const std::vector<WaypointSource>& sources,
+                                const std::vector<int>& input_waypoints = {});
 
 }  // namespace hgraph

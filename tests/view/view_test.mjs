@@ -8,7 +8,8 @@
 // Screenshots are kept in --artifacts.
 //
 // Usage: node view_test.mjs --hgraph BIN --npm DIR --chromium BIN --scene S --paths P
-//            --work DIR --artifacts DIR --name NAME [-- extra merge flags]
+//            --work DIR --artifacts DIR --name NAME [--min-share F] [--min-sources N]
+//            [--expect-chart 0|1] [-- extra merge flags]
 import { spawnSync } from 'node:child_process';
 import fs from 'node:fs';
 import { createRequire } from 'node:module';
@@ -176,12 +177,16 @@ async function main() {
     const objective = await page.evaluate(() => Number(document.getElementById('objective').dataset.value));
     expect(sameNumber(objective, result.objective), `legend: objective ${objective} = result ${result.objective}`);
 
-    // Chart: one point per objective the merge reported during its post-optimization.
+    // Chart: one point per objective the merge reported during its post-optimization, and no
+    // chart when it reported none (--optimize-ms 0).
     const reported = (result.progress || []).filter((p) => p.phase === 'optimize' && p.objective !== undefined);
     const dots = await page.evaluate(() => [...document.querySelectorAll('#chart circle.dot')].map((c) => Number(c.dataset.objective)));
-    expect(reported.length > 0, `the result file kept ${reported.length} post-optimization events`);
+    const chart = opts['expect-chart'] !== '0';
+    expect(chart ? reported.length > 0 : reported.length === 0,
+           `the result file kept ${reported.length} post-optimization events`);
     expect(dots.length === reported.length && dots.every((d, i) => sameNumber(d, reported[i].objective)),
            `chart: ${dots.length} points for ${reported.length} reported objectives`);
+    if (!chart) expect(await page.$('#chart') === null, 'no chart without post-optimization events');
 
     await page.screenshot({ path: path.join(opts.artifacts, `${opts.name}.png`) });
 
@@ -197,6 +202,10 @@ async function main() {
       return { x, y, colour: s.colour, visible: depth < 1 && hit !== null && hit.id === 'view' };
     }));
     const visible = stretches.filter((s) => s.visible);
+    // The merged path is coloured by where each stretch came from.
+    const sources = new Set(stretches.map((s) => s.colour));
+    const minSources = Number(opts['min-sources'] || 1);
+    expect(sources.size >= minSources, `${sources.size} stretch colours (>= ${minSources}): ${[...sources].join(' ')}`);
     const shot = readPng(await page.screenshot({ path: path.join(opts.artifacts, `${opts.name}-merged.png`) }));
     const hits = visible.filter((s) => colourNear(shot, s.x, s.y, hexRgb(s.colour))).length;
     const share = hits / Math.max(visible.length, 1);
