@@ -1,5 +1,6 @@
 // `hgraph merge`: merge input paths, in process or through hgraph-server (--server), and write
 // the MergeResult JSON. One request builder (BuildRequest) and one printout serve both runs.
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -136,22 +137,23 @@ int RunMerge(const MergeFlags& f, const MergeRunner& run, std::optional<LoadedSc
              const v1::MergePathsRequest& request) {
   ProgressPrinter printer(!f.quiet);
   // The events are kept for the result file (--quiet only silences stderr): the view charts the
-  // post-optimization from them. In process the engine reports about once per percent of every
-  // round, hundreds of events a merge; they are kept as the service would stream them: every
-  // objective, the first and last event of each phase, and the others at most one per
-  // kRecordIntervalMs. The engine reports from its worker threads.
-  constexpr double kRecordIntervalMs = 100;
+  // post-optimization from them. In process the engine reports every round's checks, hundreds of
+  // events a merge; they are kept about as the service streams them: every objective, the first
+  // event of each phase, and the others at most one per kRecordInterval. The engine reports
+  // from its worker threads.
+  constexpr auto kRecordInterval = std::chrono::milliseconds(100);
   std::mutex records_mutex;
   google::protobuf::RepeatedPtrField<v1::ProgressRecord> records;
+  std::chrono::steady_clock::time_point last_kept;
   const ProgressCallback print = printer.callback();
   const ProgressCallback record = [&](const Progress& p) {
     {
       std::lock_guard lock(records_mutex);
-      const v1::ProgressRecord* last = records.empty() ? nullptr : &records[records.size() - 1];
-      const bool keep = last == nullptr || last->phase() != p.phase || !std::isnan(p.objective) ||
-                        (p.total > 0 && p.done == p.total) ||
-                        p.elapsed_ms - last->elapsed_ms() >= kRecordIntervalMs;
+      const auto now = std::chrono::steady_clock::now();
+      const bool keep = records.empty() || records[records.size() - 1].phase() != p.phase ||
+                        !std::isnan(p.objective) || now - last_kept >= kRecordInterval;
       if (keep) {
+        last_kept = now;
         v1::ProgressRecord* r = records.Add();
         r->set_phase(p.phase);
         r->set_done(p.done);

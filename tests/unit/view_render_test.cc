@@ -74,9 +74,11 @@ TEST(ViewRenderTest, StretchesAreNamedByInputBridgeAndShortcut) {
   EXPECT_TRUE(StretchSources({}).empty());
   // The shared start and goal, reported from input 0, lie on input 1 too: its first and last
   // edges are input 1's, not bridges. Without the inputs' sizes only the start is known.
-  const std::vector<WaypointSource> ends = {
-      {.path = 0, .index = 0}, {.path = 1, .index = 1}, {.path = 1, .index = 5},
-      {.path = 1, .index = 6}, {.path = 0, .index = 9}};
+  const std::vector<WaypointSource> ends = {{.path = 0, .index = 0},
+                                            {.path = 1, .index = 1},
+                                            {.path = 1, .index = 5},
+                                            {.path = 1, .index = 6},
+                                            {.path = 0, .index = 9}};
   EXPECT_EQ(StretchSources(ends, {10, 8}), (std::vector<int>{1, kBridgeStretch, 1, 1}));
   EXPECT_EQ(StretchSources(ends), (std::vector<int>{1, kBridgeStretch, 1, kBridgeStretch}));
 }
