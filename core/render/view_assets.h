@@ -6,9 +6,11 @@
 
 namespace hgraph::view_assets {
 
+// Each text is split in parts (a literal of the whole would be longer than C++ compilers must
+// support), in order, ending with nullptr.
 extern const char kThreeVersion[];
-extern const char kThreeJs[];
-extern const char kPageJs[];
-extern const char kPageCss[];
+extern const char* const kThreeJs[];
+extern const char* const kPageJs[];
+extern const char* const kPageCss[];
 
 }  // namespace hgraph::view_assets

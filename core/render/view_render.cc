@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -362,13 +361,16 @@ class ViewWriter {
         json += c;
       }
     }
+    const auto append = [](std::string* out, const char* const* parts) {
+      for (; *parts != nullptr; ++parts) *out += *parts;
+    };
     std::string html;
-    html.reserve(json.size() + std::strlen(view_assets::kThreeJs) + 65536);
+    html.reserve(json.size() + (1 << 20));
     html += "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n";
     html += "<meta name=\"generator\" content=\"hgraph view (three.js ";
     html += view_assets::kThreeVersion;
     html += ")\">\n<title>" + HtmlEscape(title) + " - hgraph view</title>\n<style>\n";
-    html += view_assets::kPageCss;
+    append(&html, view_assets::kPageCss);
     html += "</style>\n</head>\n<body>\n<canvas id=\"view\"></canvas>\n<div id=\"legend\"></div>\n";
     html += "<div id=\"chart\"></div>\n<div id=\"bar\">\n";
     html += "<button id=\"play\" type=\"button\">Play</button>\n";
@@ -384,9 +386,9 @@ class ViewWriter {
     html += "<script type=\"application/json\" id=\"hgraph-view-data\">";
     html += json;
     html += "</script>\n<script>\n";
-    html += view_assets::kThreeJs;
+    append(&html, view_assets::kThreeJs);
     html += "</script>\n<script>\n";
-    html += view_assets::kPageJs;
+    append(&html, view_assets::kPageJs);
     html += "</script>\n</body>\n</html>\n";
     return html;
   }
