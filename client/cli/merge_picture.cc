@@ -58,8 +58,9 @@ PicturePaths LoadPicturePaths(const std::string& scene_file, v1::Scene scene_pro
     ReadJsonFile(result_file, &result);
     v1::PathSet merged;
     *merged.add_paths() = result.path();
-    RenderPath path{.path = PathsFromProto(merged).front(),
-                    .quality = QualityFromProto(result.quality())};
+    // A --best-so-far result has its path and objective only: the legend then measures the path.
+    RenderPath path{.path = PathsFromProto(merged).front()};
+    if (result.has_quality()) path.quality = QualityFromProto(result.quality());
     path.path.name = "merged";
     ValidateInScene(*scene, scene_file, path.path, result_file + ": path");
     for (size_t i = 0; i < path.path.waypoints.size(); ++i) {

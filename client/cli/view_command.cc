@@ -68,7 +68,10 @@ int RunView(const ViewFlags& f, const PathChecker& checker) {
     }
     request.measure = MeasureLabel(result.measure());
     request.objective = result.objective();
-    if (result.best_input() >= 0) request.best_input_objective = result.best_input_objective();
+    // A --best-so-far result reports no inputs (and best_input reads 0).
+    if (result.best_input() >= 0 && result.best_input() < result.inputs_size()) {
+      request.best_input_objective = result.best_input_objective();
+    }
     for (const v1::ProgressRecord& p : result.progress()) {
       if (p.phase() != "optimize" || !p.has_objective()) continue;
       request.rounds.push_back(OptimizeRound{

@@ -493,6 +493,16 @@ def view_writes_one_offline_file(env):
     expect(proc.returncode == 0, "view --paths alone failed")
     proc = env.run("view", "--scene", env.scene, "--out", "none.html")
     env.expect_bad_input(proc, "--paths")
+    # A --best-so-far result holds its path, objective and measure only: the legend measures the
+    # path, and there is no best input to compare with.
+    env.write("best.json", {k: result[k] for k in ("path", "objective", "measure")})
+    proc = env.run("view", "--scene", env.scene, "--result", "best.json", "--out", "best.html")
+    expect(proc.returncode == 0, "view of a best-so-far result failed")
+    best = json.loads(re.search(r'id="hgraph-view-data">(.*?)</script>',
+                                (env.work / "best.html").read_text(), re.S).group(1))
+    expect(abs(best["merged"]["length"] - result["quality"]["length"]) <= 1e-9,
+           "the merged path's length is not measured")
+    expect("best_input_objective" not in best["measure"], "a best input where there is none")
 
 
 @case
