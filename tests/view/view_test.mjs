@@ -9,7 +9,7 @@
 //
 // Usage: node view_test.mjs --hgraph BIN --npm DIR --chromium BIN --scene S --paths P
 //            --work DIR --artifacts DIR --name NAME [--min-share F] [--min-sources N]
-//            [--expect-chart 0|1] [-- extra merge flags]
+//            [--expect-chart 0|1] [--expect-clearance 0|1] [-- extra merge flags]
 import { spawnSync } from 'node:child_process';
 import fs from 'node:fs';
 import { createRequire } from 'node:module';
@@ -162,6 +162,11 @@ async function main() {
            `legend: merged length ${merged && merged.length} = result ${result.quality.length}`);
     expect(merged && Math.abs(parseFloat(merged.lengthText) - result.quality.length) <= 1e-4 * result.quality.length,
            `legend: merged length shown as ${merged && merged.lengthText}`);
+    const clearances = opts['expect-clearance'] === '1';
+    if (clearances) {
+      expect(result.quality.has_clearance && result.inputs.every((r) => !r.valid || r.quality.has_clearance),
+             'the result reports every clearance (--report-inputs --report-clearance)');
+    }
     if (result.quality.has_clearance) {
       expect(merged && sameNumber(Number(merged.clearance), result.quality.min_clearance),
              `legend: merged clearance ${merged && merged.clearance} = result ${result.quality.min_clearance}`);
@@ -172,6 +177,10 @@ async function main() {
       if (row && report.valid) {
         expect(sameNumber(row.length, report.quality.length),
                `legend: ${report.name} length ${row.length} = result ${report.quality.length}`);
+        if (report.quality.has_clearance) {
+          expect(sameNumber(Number(row.clearance), report.quality.min_clearance),
+                 `legend: ${report.name} clearance ${row.clearance} = result ${report.quality.min_clearance}`);
+        }
       }
     }
     const objective = await page.evaluate(() => Number(document.getElementById('objective').dataset.value));
