@@ -1,10 +1,10 @@
 #!/usr/bin/env python3
-"""The README's command-line reference: the --help of hgraph-server and of every hgraph
+"""The command-line reference of docs/cli.md: the --help of hgraph-server and of every hgraph
 subcommand, between the markers below. Regenerate it after changing a flag:
 
     scripts/cli_reference.py --hgraph build/hgraph --server build/hgraph-server --write
 
-Without --write it checks (the docs.cli_reference test): exit 1 and a diff when the README
+Without --write it checks (the docs.cli_reference test): exit 1 and a diff when the page
 differs from what the binaries print.
 """
 import argparse
@@ -15,7 +15,7 @@ import sys
 
 BEGIN = "<!-- BEGIN CLI REFERENCE (scripts/cli_reference.py --write) -->"
 END = "<!-- END CLI REFERENCE -->"
-SUBCOMMANDS = ["merge", "check", "plan", "render", "import-cfg", "requery", "add-paths"]
+SUBCOMMANDS = ["merge", "check", "plan", "render", "view", "import-cfg", "requery", "add-paths"]
 
 
 def help_text(*cmd):
@@ -36,8 +36,8 @@ def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--hgraph", required=True)
     parser.add_argument("--server", required=True)
-    parser.add_argument("--readme", default=str(pathlib.Path(__file__).parent.parent /
-                                                "README.md"))
+    parser.add_argument("--readme", default=str(pathlib.Path(__file__).parent.parent / "docs" /
+                                                "cli.md"))
     parser.add_argument("--write", action="store_true")
     args = parser.parse_args()
     readme = pathlib.Path(args.readme)
@@ -52,8 +52,9 @@ def main():
         return 0
     if current != wanted:
         sys.stdout.writelines(difflib.unified_diff(
-            current.splitlines(True), wanted.splitlines(True), "README.md", "--help"))
-        print("README's command-line reference differs from --help; regenerate it with "
+            current.splitlines(True), wanted.splitlines(True), readme.name, "--help"))
+        print("%s: the command-line reference differs" % readme +
+              " from --help; regenerate it with "
               "scripts/cli_reference.py --write", file=sys.stderr)
         return 1
     return 0

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The demo: starts hgraph-server on a loopback port, plans three input paths with the paper's PRM
 # on the built-in grid scene through it, merges them for length (all-pairs on a subdivided
-# H-Graph; every path profiled so that the legend has its clearance) and writes a picture.
+# H-Graph; every path profiled so that the legend has its clearance) and writes a picture (SVG)
+# and the interactive 3D view (view.html, one file that opens in a browser) beside it.
 # Usage: scripts/demo.sh [BUILD_DIR] [OUT_DIR] (defaults: build, a fresh temporary folder). From
 # a fresh clone it first installs the missing Debian packages and builds the server and the CLI.
 # Exits non-zero if any step fails.
@@ -35,4 +36,7 @@ echo "hgraph-server listening on 127.0.0.1:$port (log: $out/server.log)"
   --variant all-pairs --max-node-spacing 0.5 --measure length --report-inputs --report-clearance \
   --out "$out/result.json" --out-path "$out/merged.json" --svg "$out/grid.svg"
 "$build/hgraph" check --server "127.0.0.1:$port" --scene "$scene" --paths "$out/merged.json"
+"$build/hgraph" view --scene "$scene" --paths "$out/inputs.json" --result "$out/result.json" \
+  --out "$out/view.html"
 echo "picture: $out/grid.svg (rsvg-convert $out/grid.svg -o grid.png)"
+echo "3D view: $out/view.html (open it in a browser)"

@@ -16,15 +16,18 @@ packages=(
   python3-setuptools python3-wheel
   clang libclang-rt-14-dev
 )
+# npm installs the pinned packages of core/render/view (three, which the 3D view inlines; the
+# build runs `npm ci`) and buf (scripts/buf.sh). Debian's npm conflicts with a nodejs that
+# bundles its own npm: only when absent.
+command -v npm > /dev/null || packages+=(npm)
 if [ "${1:-}" != "--build" ]; then
   # Tests: pictures (librsvg), nginx as the gRPC front (tests/deploy/affinity_test.py),
-  # openssl for the certificates of tests/integration/test_security.py.
-  packages+=(librsvg2-bin nginx openssl)
+  # openssl for the certificates of tests/integration/test_security.py, chromium for the 3D
+  # view's browser test (tests/view, headless, WebGL through SwiftShader).
+  packages+=(librsvg2-bin nginx openssl chromium)
   # kubectl renders deploy/ (tests/deploy); Debian's kubernetes-client provides it, but an
   # image may already carry kubectl from another package (they conflict): only when absent.
   command -v kubectl > /dev/null || packages+=(kubernetes-client)
-  # npm installs buf (scripts/buf.sh); Debian's npm conflicts with a nodejs that bundles its own.
-  command -v npm > /dev/null || packages+=(npm)
 fi
 
 missing=()

@@ -70,6 +70,7 @@ Subcommand AddMergeCommand(CLI::App& parent);
 Subcommand AddCheckCommand(CLI::App& parent);
 Subcommand AddPlanCommand(CLI::App& parent);
 Subcommand AddRenderCommand(CLI::App& parent);
+Subcommand AddViewCommand(CLI::App& parent);
 Subcommand AddImportCfgCommand(CLI::App& parent);
 
 }  // namespace hgraph::cli

@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
       WithServer(AddCheckCommand(app)),
       WithServer(AddPlanCommand(app)),
       WithServer(AddRenderCommand(app)),
+      WithServer(AddViewCommand(app)),
       WithServer(AddImportCfgCommand(app)),
       AddRequeryCommand(app),
       AddAddPathsCommand(app),

@@ -1,10 +1,13 @@
 // `hgraph merge`: merge input paths, in process or through hgraph-server (--server), and write
 // the MergeResult JSON. One request builder (BuildRequest) and one printout serve both runs.
+#include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <functional>
 #include <limits>
 #include <map>
+#include <mutex>
 #include <optional>
 #include <string>
 
@@ -133,8 +136,42 @@ int RunMerge(const MergeFlags& f, const MergeRunner& run, std::optional<LoadedSc
              double resolution, const v1::Scene& scene_proto, const std::vector<InputPath>& paths,
              const v1::MergePathsRequest& request) {
   ProgressPrinter printer(!f.quiet);
-  const MergeRun response = run(request, printer.callback());
+  // The events are kept for the result file (--quiet only silences stderr): the view charts the
+  // post-optimization from them. In process the engine reports every round's checks, hundreds of
+  // events a merge; they are kept about as the service streams them: every objective, the first
+  // event of each phase, and the others at most one per kRecordInterval. The engine reports
+  // from its worker threads.
+  constexpr auto kRecordInterval = std::chrono::milliseconds(100);
+  std::mutex records_mutex;
+  google::protobuf::RepeatedPtrField<v1::ProgressRecord> records;
+  std::chrono::steady_clock::time_point last_kept;
+  const ProgressCallback print = printer.callback();
+  const ProgressCallback record = [&](const Progress& p) {
+    {
+      std::lock_guard lock(records_mutex);
+      const auto now = std::chrono::steady_clock::now();
+      const bool keep = records.empty() || records[records.size() - 1].phase() != p.phase ||
+                        !std::isnan(p.objective) || now - last_kept >= kRecordInterval;
+      if (keep) {
+        last_kept = now;
+        v1::ProgressRecord* r = records.Add();
+        r->set_phase(p.phase);
+        r->set_done(p.done);
+        r->set_total(p.total);
+        r->set_collision_checks(p.collision_checks);
+        r->set_distance_queries(p.distance_queries);
+        r->set_elapsed_ms(p.elapsed_ms);
+        if (!std::isnan(p.objective)) r->set_objective(p.objective);
+      }
+    }
+    if (print) print(p);
+  };
+  MergeRun response = run(request, record);
   printer.Finish();
+  {
+    std::lock_guard lock(records_mutex);
+    *response.result.mutable_progress() = std::move(records);
+  }
 
   if (!f.out.empty()) WriteTextFile(f.out, ToJson(response.result));
   // --svg needs the scene, which this side holds: it is drawn here, from the result.
@@ -205,7 +242,6 @@ int RunRemote(const MergeFlags& f, const RemoteOptions& remote) {
         best->set_objective(p.objective());
         if (p.done() == 0) best->set_hgraph_objective(p.objective());
       }
-      if (!progress) return;  // --quiet
       progress(Progress{.phase = p.phase(),
                         .done = p.done(),
                         .total = p.total(),

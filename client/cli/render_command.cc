@@ -1,19 +1,15 @@
 // `hgraph render`: an SVG picture of a scene, input paths and (optionally) a merge result.
-#include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <map>
 #include <string>
 
 #include "client/cli/cli_common.h"
 #include "client/cli/command.h"
+#include "client/cli/merge_picture.h"
 #include "client/cli/remote.h"
 #include "core/adapter/json_io.h"
-#include "core/adapter/merge_proto.h"
-#include "core/adapter/path_io.h"
 #include "core/adapter/scene_proto.h"
 #include "core/render/svg_render.h"
-#include "hgraph/v1/merge.pb.h"
 
 namespace hgraph::cli {
 namespace {
@@ -28,70 +24,19 @@ struct RenderFlags {
   int width = 900;
 };
 
-int RunRender(const RenderFlags& f, PathChecker checker) {
+int RunRender(const RenderFlags& f, const PathChecker& checker) {
   const Plane plane = ParsePlane(f.plane, "--plane");
   v1::Scene scene_proto = ReadSceneFile(f.scene);
   const std::shared_ptr<const Scene> scene = SceneFromProto(
       scene_proto, std::filesystem::path(f.scene).parent_path().string(), BlobResolver());
 
-  RenderRequest request{.plane = plane, .width_px = f.width, .footprints = f.footprints};
-  if (!f.paths.empty()) {
-    for (InputPath& path : LoadPathsFile(f.paths, scene->space)) {
-      request.inputs.push_back(RenderPath{.path = std::move(path)});
-    }
-  }
-  std::vector<bool> reported(request.inputs.size(), false);
-  if (!f.result.empty()) {
-    v1::MergeResult result;
-    ReadJsonFile(f.result, &result);
-    v1::PathSet merged;
-    *merged.add_paths() = result.path();
-    RenderPath out{.path = PathsFromProto(merged).front(),
-                   .quality = QualityFromProto(result.quality())};
-    out.path.name = "merged";
-    request.merged = std::move(out);
-    // Reports follow the order of the merge's inputs; match by name so that a paths file in
-    // another order (or a subset of it) still gets the right numbers.
-    std::map<std::string, const v1::InputReport*> reports;
-    for (const v1::InputReport& report : result.inputs()) reports[report.name()] = &report;
-    for (size_t i = 0; i < request.inputs.size(); ++i) {
-      RenderPath& input = request.inputs[i];
-      const auto it = reports.find(input.path.name);
-      if (it == reports.end()) continue;
-      reported[i] = true;
-      if (it->second->valid()) {
-        input.quality = QualityFromProto(it->second->quality());
-      } else {
-        input.path.name += " (invalid)";
-      }
-    }
-  }
-  if (request.inputs.empty() && !request.merged) {
-    throw InputError("--paths", "nothing to draw: give --paths, --result or both");
-  }
-
-  // Inputs the result does not cover get their length and clearance from the check a merge
-  // runs on its inputs: here, or on the server with --server.
-  std::vector<InputPath> unreported;
-  std::vector<size_t> where;
-  for (size_t i = 0; i < request.inputs.size(); ++i) {
-    if (reported[i]) continue;
-    unreported.push_back(request.inputs[i].path);
-    where.push_back(i);
-  }
-  if (!unreported.empty()) {
-    if (!checker) checker = LocalPathChecker(std::move(scene_proto), f.scene, scene);
-    const CheckRun run = checker(unreported, CheckSettings{});
-    for (size_t j = 0; j < where.size(); ++j) {
-      RenderPath& input = request.inputs[where[j]];
-      const InputReport& report = run.result.paths.at(j);
-      if (report.valid) {
-        input.quality = report.quality;
-      } else {
-        input.path.name += " (invalid)";
-      }
-    }
-  }
+  PicturePaths paths =
+      LoadPicturePaths(f.scene, std::move(scene_proto), scene, f.paths, f.result, checker);
+  RenderRequest request{.inputs = std::move(paths.inputs),
+                        .merged = std::move(paths.merged),
+                        .plane = plane,
+                        .width_px = f.width,
+                        .footprints = f.footprints};
   WriteTextFile(f.svg, RenderSvg(*scene, request));
   std::printf("wrote %s (%zu input paths%s, %s plane)\n", f.svg.c_str(), request.inputs.size(),
               request.merged ? " and the merged path" : "", PlaneName(plane));

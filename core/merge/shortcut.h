@@ -22,14 +22,6 @@ namespace hgraph {
 // not depend on the thread count.
 inline constexpr int kShortcutBatch = 8;
 
-// Where a waypoint lies on an input path, as an H-Graph node says it (HNode path, index, t: on
-// the input's edge (index, index + 1) at fraction t); path -1 where it lies on none.
-struct WaypointSource {
-  int path = -1;
-  int index = -1;
-  double t = 0;
-};
-
 // The source of the point a fraction t of the way from a waypoint of source `a` to one of
 // source `b`: on the input edge both lie on (their motion is a piece of it), else on none.
 WaypointSource SourceBetween(const WaypointSource& a, const WaypointSource& b, double t);

@@ -14,6 +14,16 @@ namespace hgraph {
 inline constexpr double kEndpointTolerance = 1e-6;
 
 // A discrete input path. Plain struct; copyable.
+// Where a waypoint lies on the input paths of a merge (MergeResult source_path, source_index,
+// source_fraction; an H-Graph node's path, index and t): on input `path`'s edge (index,
+// index + 1) at fraction t in [0, 1), t = 0 at its waypoint `index`; path -1 where it lies on
+// none (a shortcut's end off the inputs, a partial shortcut's point).
+struct WaypointSource {
+  int path = -1;
+  int index = -1;
+  double t = 0;
+};
+
 struct InputPath {
   std::string name;
   std::vector<Config> waypoints;

@@ -221,10 +221,15 @@ def ompl_app_problem_end_to_end(env):
     merged = env.work / "merged.path"
     svg = env.work / "ompl_app.svg"
     env.run("merge", "--scene", cfg, "--paths", paths, "--out-path", merged, "--svg", svg, "-q")
-    # OMPL's .path text: one "x y theta" line per waypoint.
-    lines = [l.split() for l in merged.read_text().splitlines() if l and not l.startswith("#")]
-    expect(len(lines) >= 2 and all(len(l) == 3 for l in lines), "not an SE(2) .path file")
-    expect([float(v) for v in lines[0][:2]] == [-3.0, 2.0], "merged path does not start at start")
+    # OMPL's PathGeometric printout, as OMPL.app's .path files: per state, "RealVectorState [x y]"
+    # then "SO2State [theta]".
+    text = merged.read_text()
+    xy = re.findall(r"RealVectorState \[([^\]]*)\]", text)
+    theta = re.findall(r"SO2State \[([^\]]*)\]", text)
+    expect(text.startswith("Geometric path with %d states" % len(xy)), "not a .path printout")
+    expect(len(xy) >= 2 and len(theta) == len(xy) and all(len(v.split()) == 2 for v in xy),
+           "not an SE(2) .path file")
+    expect([float(v) for v in xy[0].split()] == [-3.0, 2.0], "merged path does not start at start")
     env.run("check", "--scene", scene_json, "--paths", merged)
     env.run("check", "--scene", cfg, "--paths", merged)
     rows = env.png_of(svg)
