@@ -5,6 +5,7 @@ Run through CTest (which sets the environment), or by hand:
     HGRAPH_SERVER=build/hgraph-server HGRAPH_CLI=build/hgraph \
     PYTHONPATH=client/python:build/python /usr/bin/python3 -m pytest tests/integration
 """
+import concurrent.futures
 import json
 import os
 import pathlib
@@ -954,3 +955,33 @@ def test_a_scene_digest_with_a_wrong_size_is_refused_naming_the_field(server):
         assert e.value.code() == grpc.StatusCode.INVALID_ARGUMENT
         assert "scene.size_bytes" in e.value.details(), e.value.details()
         assert c.create_session(digest).name.startswith("sessions/")
+
+
+def test_requery_answers_do_not_depend_on_earlier_or_concurrent_ones(client):
+    """A stored H-Graph answers each measure the same, whatever was asked before or at the same
+    time (the length requeries' post-optimization used to leave its shortcuts in the graph), and
+    as the merge that built it answers that measure."""
+    paths = [[list(q.values) for q in p.waypoints] for p in input_paths().paths]
+    merged = client.merge(paths, measure="inverse-clearance", k=3, variant="all-pairs")
+    measures = [("bottleneck-clearance", {}), ("length", {}), ("inverse-clearance", {"k": 3})]
+
+    def answer(result):
+        return ([list(w.values) for w in result.path.waypoints], result.objective,
+                list(result.source_path), list(result.source_index),
+                list(result.source_fraction))
+
+    first = {}
+    for name, extra in measures + measures[::-1]:
+        got = answer(client.requery(merged.hgraph, name, **extra))
+        assert first.setdefault(name, got) == got, name
+    assert answer(merged.result) == first["inverse-clearance"]
+    # A merge under length equals a requery under length.
+    assert answer(client.merge(paths, variant="all-pairs").result) == first["length"]
+
+    def run(i):
+        name, extra = measures[i % len(measures)]
+        return name, answer(client.requery(merged.hgraph, name, **extra))
+
+    with concurrent.futures.ThreadPoolExecutor(max_workers=8) as pool:
+        for name, got in pool.map(run, range(48)):
+            assert got == first[name], name
