@@ -13,6 +13,7 @@
 #include "core/common/error.h"
 #include "core/common/limits.h"
 #include "core/common/parallel.h"
+#include "core/merge/optimize.h"
 #include "core/merge/path_check.h"
 #include "core/merge/shortcut.h"
 #include "core/search/search.h"
@@ -69,26 +70,6 @@ const std::vector<double>& ScanFractions() {
 }
 
 // The automatic post-optimization's budget, and the gain below which a round ends it.
-// The automatic post-optimization's budget in rounds (each one call of ShortcutCertified), and
-// as many again for each restart asked for. Rounds stop sooner once one gains less than
-// kOptimizeMinGain: on the 21 kept benchmark problems (hgraph-bench seeds 1-3) the defaults ran
-// 4 to 12 rounds, and with two restarts 14 to 43 in all.
-constexpr int kAutomaticOptimizeRounds = 100;
-constexpr double kOptimizeMinGain = 1e-3;
-// Rounds of corner cuts (ShortcutRequest::corners_only) after the random rounds, length only.
-// On the 14 kept benchmark problems they took the geometric mean of the length ratios to the
-// best OMPL pipeline from 0.952 to 0.942 (one round: 0.949), for 32% more checks.
-constexpr int kPolishRounds = 3;
-// The share of partial shortcuts with MergeOptions::partial_shortcuts. On the 21 kept benchmark
-// problems (hgraph-bench seeds 1-3, one thread, 4 seeds of the rounds) 0.25 took the geometric
-// mean of the length ratios to the best OMPL pipeline from 0.944 to 0.935 for 18% more checks;
-// 0.15: 0.940, 0.35: 0.938 for 25% more.
-constexpr double kPartialShare = 0.25;
-
-int ResolveThreads(int threads) {
-  if (threads < 0) throw InputError("options.threads", "must be >= 0 (0 = all cores)");
-  return threads == 0 ? DefaultConcurrency() : threads;
-}
 
 // The H-Graph's shape in `stats`: its sizes and the candidate parameters, which every query
 // reports as they are, without the figures that count the work of one call (checks, queries,
@@ -148,6 +129,11 @@ EdgeReport JoinParts(const std::vector<EdgePart>& parts) {
 }
 
 }  // namespace
+
+int ResolveThreads(int threads) {
+  if (threads < 0) throw InputError("options.threads", "must be >= 0 (0 = all cores)");
+  return threads == 0 ? DefaultConcurrency() : threads;
+}
 
 const char* OptimizeStopName(OptimizeStop stop) {
   switch (stop) {
@@ -797,243 +783,6 @@ std::vector<WaypointSource> HybridizationSession::SourcesOf(const std::vector<in
   return sources;
 }
 
-SearchResult HybridizationSession::Optimize(const Measure& measure, SearchResult best,
-                                            const ProgressCallback& progress,
-                                            const CancelToken& cancel, MergeResult* result,
-                                            int64_t* rechecked) {
-  const MeasureType type = measure.spec().type;
-  if (options_.optimize_ms == 0 ||
-      (type != MeasureType::kLength && type != MeasureType::kSafeLength)) {
-    return best;
-  }
-  const Clock::time_point started = Clock::now();
-  // The clock stops the rounds only when the client gave a budget in time; the automatic budget
-  // counts rounds, so that the answer is the same on any machine and under any load.
-  const bool timed = options_.optimize_ms > 0;
-  // Restarts until the budget runs out (an explicit one), or this many.
-  const bool restarts_by_budget = options_.optimize_restarts < 0;
-  const int max_rounds =
-      timed ? std::numeric_limits<int>::max()
-            : kAutomaticOptimizeRounds * (1 + std::max(0, options_.optimize_restarts));
-  const Space& space = checker_->space();
-  // Whether the budget lasts and the query's overlay may still grow (within
-  // limits::kMaxOptimizeNodes and kMaxOptimizeEdges); records what stopped the rounds.
-  const int nodes_before = graph_.num_nodes();
-  const int edges_before = graph_.num_edges();
-  int round = 0;
-  result->stats.optimize_stop = OptimizeStop::kConverged;
-  const auto go_on = [&] {
-    OptimizeStop& stop = result->stats.optimize_stop;
-    if (graph_.num_nodes() - nodes_before >= limits::kMaxOptimizeNodes ||
-        graph_.num_edges() - edges_before >= limits::kMaxOptimizeEdges) {
-      stop = OptimizeStop::kGrowth;
-    } else if (timed && MsSince(started) >= options_.optimize_ms) {
-      stop = OptimizeStop::kTime;
-    } else if (round >= max_rounds) {
-      stop = OptimizeStop::kRounds;
-    } else {
-      return true;
-    }
-    return false;
-  };
-  // Bridges from a shortcut's new points reach the nodes within the H-Graph's own scale.
-  const double reach =
-      build_stats_.radius > 0 ? build_stats_.radius : 2 * MeanInputEdgeLength(graph_, space);
-  double objective = measure.Objective(EvaluateEdges(graph_, best.edges, measure.spec().k));
-  SearchResult found = best;
-  // The best path so far: its objective, and with progress_paths the path (every path here is
-  // certified: the H-Graph's optimum, each round's search and each polish).
-  const auto stream = [&] {
-    if (!progress) return;
-    std::shared_ptr<InputPath> path;
-    if (options_.progress_paths) {
-      path = std::make_shared<InputPath>(InputPath{.name = "merged"});
-      for (int n : OutputNodes(found)) path->waypoints.push_back(graph_.node(n).q);
-    }
-    progress(Progress{.phase = "optimize",
-                      .done = round,
-                      .total = 0,
-                      .collision_checks = 0,
-                      .distance_queries = 0,
-                      .elapsed_ms = MsSince(started),
-                      .objective = objective,
-                      .path = std::move(path)});
-  };
-  stream();
-  // Takes `next` if it is better; whether it gains at least kOptimizeMinGain.
-  const auto take = [&](SearchResult next) {
-    const double next_objective =
-        measure.Objective(EvaluateEdges(graph_, next.edges, measure.spec().k));
-    const bool improved = next_objective < objective * (1 - kOptimizeMinGain);
-    if (next_objective < objective) {
-      found = std::move(next);
-      objective = next_objective;
-      stream();
-    }
-    return improved;
-  };
-  // The search over everything the H-Graph holds now: certified, so that every objective streamed
-  // is that of a certified path; under a measure of clearance (safe length) also profiled, for
-  // the objective to be known (the search may take an edge whose clearance floor proves the
-  // safety without a profile).
-  const auto search = [&] {
-    return SearchBest(measure,
-                      measure.needs_clearance() ? EdgeNeed::kClearance : EdgeNeed::kCertificate,
-                      progress, cancel, result, rechecked);
-  };
-  // A motion checked between two nodes joins the H-Graph with its report (an edge it already
-  // holds keeps its own report unless unchecked), so that no later round or search checks it
-  // again.
-  const auto keep = [&](int a, int b, const EdgeReport& report) {
-    if (a == b) return;
-    const int e = graph_.AddEdge(a, b, false);
-    if (graph_.edge(e).report.state == EdgeState::kUnchecked) {
-      graph_.mutable_edge(e).report = report;
-    }
-  };
-  // One round of shortcuts (or, polishing, of corner cuts) of a path whose waypoints are the
-  // nodes `ids`. What it checks joins the H-Graph; so does its path when it gained (new points as
-  // nodes, its edges with their reports, and unless polishing unchecked bridges from the new
-  // points to the nodes near them), whose node ids then replace `ids`. With `lazy` its motions
-  // are taken when valid at their samples (ShortcutRequest::lazy), for a search to certify.
-  const auto shorten = [&](const std::vector<int>& ids, const std::vector<EdgeReport>& edges,
-                           bool polishing, bool lazy) {
-    cancel.ThrowIfStopped();
-    ++round;
-    ShortcutRequest request{.path = {.name = "shortcut"},
-                            .edges = edges,
-                            .ids = ids,
-                            .sources = SourcesOf(ids),
-                            .seed = static_cast<uint64_t>(round),
-                            .safety = type == MeasureType::kSafeLength ? measure.spec().safety : 0,
-                            .corners_only = polishing,
-                            .partial = options_.partial_shortcuts ? kPartialShare : 0.0,
-                            .lazy = lazy,
-                            .threads = ResolveThreads(options_.threads),
-                            .known = [this](int a, int b) -> const EdgeReport* {
-                              const int e = graph_.FindEdge(a, b);
-                              return e < 0 ? nullptr : &graph_.edge(e).report;
-                            }};
-    for (int n : ids) request.path.waypoints.push_back(graph_.node(n).q);
-    ShortcutResult shortcut = ShortcutCertified(*checker_, request, cancel);
-    *rechecked += shortcut.edges_checked;
-    ++result->stats.optimize_rounds;
-    for (const auto& [a, b, report] : shortcut.id_checks) keep(a, b, report);
-    if (shortcut.accepted == 0) return shortcut;
-    result->stats.shortcuts += shortcut.accepted;
-    std::vector<int> fresh;
-    for (size_t j = 0; j < shortcut.ids.size(); ++j) {
-      if (shortcut.ids[j] >= 0) continue;
-      const WaypointSource& source = shortcut.sources[j];
-      shortcut.ids[j] =
-          graph_.AddNode(shortcut.path.waypoints[j], source.path, source.index, source.t);
-      fresh.push_back(shortcut.ids[j]);
-    }
-    for (size_t j = 0; j + 1 < shortcut.ids.size(); ++j) {
-      keep(shortcut.ids[j], shortcut.ids[j + 1], shortcut.edges[j]);
-    }
-    if (!polishing) {
-      for (int u : fresh) {
-        for (int v = 0; v < graph_.num_nodes(); ++v) {
-          if (v == u || space.Distance(graph_.node(u).q, graph_.node(v).q) > reach) continue;
-          graph_.AddEdge(u, v, false);
-        }
-      }
-    }
-    return shortcut;
-  };
-
-  // Runs `one_round` (random shortcuts, or with `polishing` corner cuts; it returns whether it
-  // gained at least kOptimizeMinGain) while the rounds gain and go_on() allows: random rounds, then
-  // up to kPolishRounds polishing rounds (length only: under safe length a cut's pieces would need
-  // profiles of their own).
-  const auto run_rounds = [&](const auto& one_round) {
-    for (int polish_rounds = -1; go_on();) {
-      const bool polishing = polish_rounds >= 0;
-      if (!one_round(polishing)) {
-        if (polishing || type != MeasureType::kLength) return;
-        polish_rounds = 0;
-      } else if (polishing && ++polish_rounds == kPolishRounds) {
-        return;
-      }
-    }
-  };
-
-  // Rounds of the best path, each re-hybridized (a polished path is taken as it is). Their
-  // shortcuts are certified, not lazy: a lazy round's shortcut that its certificate then rejects
-  // (one grazing an obstacle) leaves the round's search without gain and ends the rounds early
-  // (wall_planar, seed-3 inputs: 8.38 against 8.33), and a certified round after each such round
-  // cost more than laziness saved (21 kept problems: 518k against 441k, collision checks + 10 x
-  // distance queries).
-  run_rounds([&](bool polishing) {
-    std::vector<EdgeReport> edges;
-    for (int e : found.edges) edges.push_back(graph_.edge(e).report);
-    const ShortcutResult shortcut = shorten(found.nodes, edges, polishing, false);
-    if (shortcut.accepted == 0) return false;
-    SearchResult next;
-    if (polishing) {
-      // The polished path itself: every edge proven free (the cuts) or a piece of one.
-      next.found = true;
-      for (int id : shortcut.ids) {
-        if (!next.nodes.empty() && next.nodes.back() == id) continue;
-        if (!next.nodes.empty()) next.edges.push_back(graph_.FindEdge(next.nodes.back(), id));
-        next.nodes.push_back(id);
-      }
-    } else {
-      next = search();
-    }
-    return take(std::move(next));
-  });
-
-  // Restarts (MergeOptions::optimize_restarts): an input path, the shortest first and then each
-  // in turn, is shortened on its own (random rounds while they gain, then the polish, no search
-  // between), then the search runs over the H-Graph it has joined. Where the best path's
-  // shortcuts settle in one local optimum, an input may lead into a better one, and the search
-  // may take any mix of the two. Lazily: an input shortened from its waypoints replaces most of
-  // its shortcuts by later ones, so they are checked at their samples only and the search
-  // certifies the edges it takes (two restarts on the 21 kept problems: 834k against 1316k,
-  // never longer than OMPL either way).
-  std::vector<int> order(graph_.num_paths());
-  std::iota(order.begin(), order.end(), 0);
-  std::vector<double> input_length(order.size());
-  for (int p : order) input_length[p] = PathLength(space, graph_.path(p));
-  std::stable_sort(order.begin(), order.end(),
-                   [&](int a, int b) { return input_length[a] < input_length[b]; });
-  for (int restart = 0;
-       !order.empty() && go_on() &&
-       (restarts_by_budget ? options_.optimize_ms > 0 : restart < options_.optimize_restarts);
-       ++restart) {
-    std::vector<int> ids;
-    for (int n : graph_.path_nodes(order[restart % order.size()])) {
-      if (ids.empty() || ids.back() != n) ids.push_back(n);
-    }
-    // The input's edges as the shortcuts need them (their lengths); checked or not, the search
-    // decides on them.
-    std::vector<EdgeReport> edges;
-    double length = 0;
-    for (size_t j = 0; j + 1 < ids.size(); ++j) {
-      edges.push_back(
-          EdgeReport{.length = space.Distance(graph_.node(ids[j]).q, graph_.node(ids[j + 1]).q)});
-      length += edges.back().length;
-    }
-    run_rounds([&](bool polishing) {
-      ShortcutResult shortcut = shorten(ids, edges, polishing, true);
-      if (shortcut.accepted == 0) return false;
-      double shortened = 0;
-      for (const EdgeReport& e : shortcut.edges) shortened += e.length;
-      const bool gained = shortened < length * (1 - kOptimizeMinGain);
-      length = shortened;
-      ids = std::move(shortcut.ids);
-      edges = std::move(shortcut.edges);
-      return gained;
-    });
-    cancel.ThrowIfStopped();
-    take(search());
-  }
-  result->timing.optimize_ms += MsSince(started);
-  return found;
-}
-
 MergeResult HybridizationSession::Query(const MeasureSpec& spec, const ProgressCallback& progress,
                                         const CancelToken& cancel,
                                         std::optional<bool> report_clearance) {
@@ -1106,7 +855,10 @@ MergeResult HybridizationSession::Query(const MeasureSpec& spec, const ProgressC
       SearchBest(*measure, needs_clearance ? EdgeNeed::kClearance : EdgeNeed::kCertificate,
                  progress, cancel, &result, &rechecked);
   result.hgraph_objective = measure->Objective(EvaluateEdges(graph_, best.edges, spec.k));
-  best = Optimize(*measure, std::move(best), progress, cancel, &result, &rechecked);
+  if (PostOptimizer::Applies(options_, *measure)) {
+    best =
+        PostOptimizer(*this, *measure, progress, cancel, &result, &rechecked).Run(std::move(best));
+  }
   if (!needs_clearance && profile_result) {
     best = SearchBest(*measure, EdgeNeed::kClearance, progress, cancel, &result, &rechecked);
   }

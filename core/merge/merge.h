@@ -174,6 +174,8 @@ class HybridizationSession {
   size_t memory_bytes() const;
 
  private:
+  // The anytime post-optimization (optimize.h) grows the query's overlay and searches it.
+  friend class PostOptimizer;
   HybridizationSession(const HybridizationSession&) = default;
   // What a check of an edge must establish: validity at the resolution's samples (kSampled), a
   // certificate of the whole motion without a profile (kCertified, a few distance queries in
@@ -233,9 +235,6 @@ class HybridizationSession {
   // obstacle; then the search runs again. Adds to the result's stats and timing.
   SearchResult SearchBest(const Measure& measure, EdgeNeed finish, const ProgressCallback& progress,
                           const CancelToken& cancel, MergeResult* result, int64_t* rechecked);
-  // The anytime post-optimization of `best` (MergeOptions.optimize_ms).
-  SearchResult Optimize(const Measure& measure, SearchResult best, const ProgressCallback& progress,
-                        const CancelToken& cancel, MergeResult* result, int64_t* rechecked);
   // The nodes of a path found, as the output lists them: a node at the same configuration as
   // the one before it (an input that repeats a waypoint) once.
   std::vector<int> OutputNodes(const SearchResult& found) const;
