@@ -72,10 +72,16 @@ TEST(QueryStored, OverlappingQueriesAnswerAsQueriesInTurn) {
   const MergeResult clearance = QueryStored(*reference, Clearance(), {}, CancelToken());
 
   const std::shared_ptr<Stored> stored = MergedCircles();
-  auto a = std::async(std::launch::async,
-                      [&] { return QueryStored(*stored, MeasureSpec{}, {}, CancelToken()); });
-  auto b = std::async(std::launch::async,
-                      [&] { return QueryStored(*stored, Clearance(), {}, CancelToken()); });
+  // Both start together, so that they overlap rather than run in turn.
+  std::latch start(2);
+  auto a = std::async(std::launch::async, [&] {
+    start.arrive_and_wait();
+    return QueryStored(*stored, MeasureSpec{}, {}, CancelToken());
+  });
+  auto b = std::async(std::launch::async, [&] {
+    start.arrive_and_wait();
+    return QueryStored(*stored, Clearance(), {}, CancelToken());
+  });
   EXPECT_EQ(a.get().path.waypoints, length.path.waypoints);
   EXPECT_EQ(b.get().path.waypoints, clearance.path.waypoints);
 }
