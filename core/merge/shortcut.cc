@@ -83,52 +83,31 @@ struct Candidate {
   bool free = false;
 };
 
-}  // namespace
+// What the three phases of ShortcutCertified share: the request, and the path being shortened
+// (ShortcutResult's path, ids, sources and edges, kept in step).
+struct Shortening {
+  const MotionChecker& checker;
+  const ShortcutRequest& request;
+  const CancelToken& cancel;
+  const Space& space;
+  int threads;
+  bool lazy;
+  ShortcutResult& out;
+};
 
-WaypointSource SourceBetween(const WaypointSource& a, const WaypointSource& b, double t) {
-  if (a.path < 0 || a.path != b.path) return {};
-  // A waypoint at the start of input edge i (t = 0) is also the end of edge i - 1.
-  int index = a.index;
-  double from = a.t;
-  double to = 0;
-  if (b.index == a.index) {
-    to = b.t;
-  } else if (b.index == a.index + 1 && b.t == 0) {
-    to = 1;
-  } else if (a.index == b.index + 1 && a.t == 0) {
-    index = b.index;
-    from = 1;
-    to = b.t;
-  } else {
-    return {};
-  }
-  const double at = from + t * (to - from);
-  if (at >= 1) return WaypointSource{.path = a.path, .index = index + 1, .t = 0};
-  return WaypointSource{.path = a.path, .index = index, .t = std::max(0.0, at)};
-}
-
-ShortcutResult ShortcutCertified(const MotionChecker& checker, const ShortcutRequest& request,
-                                 const CancelToken& cancel) {
-  const Space& space = checker.space();
-  const int threads = request.threads == 0 ? DefaultConcurrency() : std::max(1, request.threads);
-  const bool lazy = request.lazy && request.safety <= 0;
-  ShortcutResult out;
-  out.path = request.path;
-  std::vector<Config>& q = out.path.waypoints;
-  HGRAPH_CHECK(q.size() >= 2);
-  std::vector<int>& ids = out.ids;
-  ids = request.ids;
-  if (ids.size() != q.size()) ids.assign(q.size(), -1);
-  std::vector<WaypointSource>& sources = out.sources;
-  sources = request.sources;
-  if (sources.size() != q.size()) sources.assign(q.size(), WaypointSource{});
-  std::vector<EdgeReport>& edges = out.edges;
-  edges = request.edges;
-  if (edges.size() != q.size() - 1) {
-    edges.assign(q.size() - 1, EdgeReport{});
-    for (size_t j = 0; j + 1 < q.size(); ++j) edges[j].length = space.Distance(q[j], q[j + 1]);
-  }
-
+// Phase 1: waypoints dropped where their neighbours connect.
+void DropWaypoints(const Shortening& shortening) {
+  const MotionChecker& checker = shortening.checker;
+  const ShortcutRequest& request = shortening.request;
+  const CancelToken& cancel = shortening.cancel;
+  const Space& space = shortening.space;
+  const int threads = shortening.threads;
+  const bool lazy = shortening.lazy;
+  ShortcutResult& out = shortening.out;
+  std::vector<Config>& q = shortening.out.path.waypoints;
+  std::vector<int>& ids = shortening.out.ids;
+  std::vector<WaypointSource>& sources = shortening.out.sources;
+  std::vector<EdgeReport>& edges = shortening.out.edges;
   // Waypoints whose neighbours connect directly. A pass checks every waypoint not yet settled
   // and drops those whose check passed, left to right, never two neighbours (the second one's
   // check joined a waypoint the first one removed); a drop unsettles the neighbours.
@@ -197,7 +176,21 @@ ShortcutResult ShortcutCertified(const MotionChecker& checker, const ShortcutReq
       ++out.accepted;
     }
   }
+}
 
+// Phase 2: seeded random pairs of points along the path, some of them partial shortcuts.
+void TryRandomPairs(const Shortening& shortening) {
+  const MotionChecker& checker = shortening.checker;
+  const ShortcutRequest& request = shortening.request;
+  const CancelToken& cancel = shortening.cancel;
+  const Space& space = shortening.space;
+  const int threads = shortening.threads;
+  const bool lazy = shortening.lazy;
+  ShortcutResult& out = shortening.out;
+  std::vector<Config>& q = shortening.out.path.waypoints;
+  std::vector<int>& ids = shortening.out.ids;
+  std::vector<WaypointSource>& sources = shortening.out.sources;
+  std::vector<EdgeReport>& edges = shortening.out.edges;
   // Random pairs of points along the path, a batch at a time.
   std::mt19937_64 rng(request.seed);
   const std::vector<Space::Part> parts = space.Parts();
@@ -337,84 +330,154 @@ ShortcutResult ShortcutCertified(const MotionChecker& checker, const ShortcutReq
       ++out.accepted;
     }
   }
+}
 
+// Phase 3 (corners_only): every corner cut where a cut is proven free.
+void CutCorners(const Shortening& shortening) {
+  const MotionChecker& checker = shortening.checker;
+  const ShortcutRequest& request = shortening.request;
+  const CancelToken& cancel = shortening.cancel;
+  const Space& space = shortening.space;
+  const int threads = shortening.threads;
+  const bool lazy = shortening.lazy;
+  ShortcutResult& out = shortening.out;
+  std::vector<Config>& q = shortening.out.path.waypoints;
+  std::vector<int>& ids = shortening.out.ids;
+  std::vector<WaypointSource>& sources = shortening.out.sources;
+  std::vector<EdgeReport>& edges = shortening.out.edges;
   // Corners cut (corners_only): each interior waypoint is replaced by two points on its edges, a
   // fraction f of each edge away from it (f = 1/2, 1/4, ..., the largest proven free), joined by
   // a straight motion. Near obstacles random pairs rarely land on both sides of one corner; this
   // is where a path tightens around them. f <= 1/2 keeps the cuts of neighbouring corners apart,
   // so every corner is tried at once.
-  if (request.corners_only && q.size() >= 3) {
-    cancel.ThrowIfStopped();
-    struct Cut {
-      Config a;
-      Config b;
-      double f = 0;
-      EdgeReport report;
-      bool free = false;
-      int checks = 0;
-    };
-    std::vector<Cut> cuts(q.size());
-    const double least_gain = kMinCornerGain * PathLength(edges);
-    ParallelFor(threads, q.size() - 2, [&](size_t k) {
-      const size_t j = k + 1;
-      if (cancel.stopped()) return;
-      for (double f = 0.5; f >= kMinCornerCut; f /= 2) {
-        Cut& cut = cuts[j];
-        cut.f = f;
-        cut.a = space.Interpolate(q[j], q[j - 1], f);
-        cut.b = space.Interpolate(q[j], q[j + 1], f);
-        if (space.Distance(cut.a, cut.b) >=
-            f * (edges[j - 1].length + edges[j].length) * (1 - 1e-9) - least_gain) {
-          return;  // a straight corner, or a cut too small to matter
-        }
-        cut.report = Check(checker, cut.a, cut.b, request.safety, lazy);
-        ++cut.checks;
-        cut.free = MayTake(cut.report, request.safety, lazy);
-        if (cut.free) return;
+  cancel.ThrowIfStopped();
+  struct Cut {
+    Config a;
+    Config b;
+    double f = 0;
+    EdgeReport report;
+    bool free = false;
+    int checks = 0;
+  };
+  std::vector<Cut> cuts(q.size());
+  const double least_gain = kMinCornerGain * PathLength(edges);
+  ParallelFor(threads, q.size() - 2, [&](size_t k) {
+    const size_t j = k + 1;
+    if (cancel.stopped()) return;
+    for (double f = 0.5; f >= kMinCornerCut; f /= 2) {
+      Cut& cut = cuts[j];
+      cut.f = f;
+      cut.a = space.Interpolate(q[j], q[j - 1], f);
+      cut.b = space.Interpolate(q[j], q[j + 1], f);
+      if (space.Distance(cut.a, cut.b) >=
+          f * (edges[j - 1].length + edges[j].length) * (1 - 1e-9) - least_gain) {
+        return;  // a straight corner, or a cut too small to matter
       }
-    });
-    cancel.ThrowIfStopped();
-    std::vector<Config> nq{q.front()};
-    std::vector<int> ni{ids.front()};
-    std::vector<WaypointSource> ns{sources.front()};
-    std::vector<EdgeReport> ne;
-    // Edge j - 1 of the path, from the previous corner's cut (if any) to this one's (if any): the
-    // edge itself, or a piece of it.
-    const auto add_edge = [&](size_t j, const Config& to) {
-      const bool whole = !cuts[j - 1].free && !cuts[j].free;
-      ne.push_back(whole ? edges[j - 1] : Piece(space, edges[j - 1], nq.back(), to));
-    };
-    for (size_t j = 1; j + 1 < q.size(); ++j) {
-      out.edges_checked += cuts[j].checks;
-      if (!cuts[j].free) {
-        add_edge(j, q[j]);
-        nq.push_back(q[j]);
-        ni.push_back(ids[j]);
-        ns.push_back(sources[j]);
-        continue;
-      }
-      // Two cuts at the middle of one edge meet there: the point is kept once.
-      if (space.Distance(nq.back(), cuts[j].a) > 0) {
-        add_edge(j, cuts[j].a);
-        nq.push_back(cuts[j].a);
-        ni.push_back(-1);
-        ns.push_back(SourceBetween(sources[j], sources[j - 1], cuts[j].f));
-      }
-      ne.push_back(std::move(cuts[j].report));
-      nq.push_back(cuts[j].b);
-      ni.push_back(-1);
-      ns.push_back(SourceBetween(sources[j], sources[j + 1], cuts[j].f));
-      ++out.accepted;
+      cut.report = Check(checker, cut.a, cut.b, request.safety, lazy);
+      ++cut.checks;
+      cut.free = MayTake(cut.report, request.safety, lazy);
+      if (cut.free) return;
     }
-    add_edge(q.size() - 1, q.back());
-    nq.push_back(q.back());
-    ni.push_back(ids.back());
-    ns.push_back(sources.back());
-    q = std::move(nq);
-    ids = std::move(ni);
-    sources = std::move(ns);
-    edges = std::move(ne);
+  });
+  cancel.ThrowIfStopped();
+  std::vector<Config> nq{q.front()};
+  std::vector<int> ni{ids.front()};
+  std::vector<WaypointSource> ns{sources.front()};
+  std::vector<EdgeReport> ne;
+  // Edge j - 1 of the path, from the previous corner's cut (if any) to this one's (if any): the
+  // edge itself, or a piece of it.
+  const auto add_edge = [&](size_t j, const Config& to) {
+    const bool whole = !cuts[j - 1].free && !cuts[j].free;
+    ne.push_back(whole ? edges[j - 1] : Piece(space, edges[j - 1], nq.back(), to));
+  };
+  for (size_t j = 1; j + 1 < q.size(); ++j) {
+    out.edges_checked += cuts[j].checks;
+    if (!cuts[j].free) {
+      add_edge(j, q[j]);
+      nq.push_back(q[j]);
+      ni.push_back(ids[j]);
+      ns.push_back(sources[j]);
+      continue;
+    }
+    // Two cuts at the middle of one edge meet there: the point is kept once.
+    if (space.Distance(nq.back(), cuts[j].a) > 0) {
+      add_edge(j, cuts[j].a);
+      nq.push_back(cuts[j].a);
+      ni.push_back(-1);
+      ns.push_back(SourceBetween(sources[j], sources[j - 1], cuts[j].f));
+    }
+    ne.push_back(std::move(cuts[j].report));
+    nq.push_back(cuts[j].b);
+    ni.push_back(-1);
+    ns.push_back(SourceBetween(sources[j], sources[j + 1], cuts[j].f));
+    ++out.accepted;
   }
+  add_edge(q.size() - 1, q.back());
+  nq.push_back(q.back());
+  ni.push_back(ids.back());
+  ns.push_back(sources.back());
+  q = std::move(nq);
+  ids = std::move(ni);
+  sources = std::move(ns);
+  edges = std::move(ne);
+}
+
+}  // namespace
+
+WaypointSource SourceBetween(const WaypointSource& a, const WaypointSource& b, double t) {
+  if (a.path < 0 || a.path != b.path) return {};
+  // A waypoint at the start of input edge i (t = 0) is also the end of edge i - 1.
+  int index = a.index;
+  double from = a.t;
+  double to = 0;
+  if (b.index == a.index) {
+    to = b.t;
+  } else if (b.index == a.index + 1 && b.t == 0) {
+    to = 1;
+  } else if (a.index == b.index + 1 && a.t == 0) {
+    index = b.index;
+    from = 1;
+    to = b.t;
+  } else {
+    return {};
+  }
+  const double at = from + t * (to - from);
+  if (at >= 1) return WaypointSource{.path = a.path, .index = index + 1, .t = 0};
+  return WaypointSource{.path = a.path, .index = index, .t = std::max(0.0, at)};
+}
+
+ShortcutResult ShortcutCertified(const MotionChecker& checker, const ShortcutRequest& request,
+                                 const CancelToken& cancel) {
+  const Space& space = checker.space();
+  const int threads = request.threads == 0 ? DefaultConcurrency() : std::max(1, request.threads);
+  const bool lazy = request.lazy && request.safety <= 0;
+  ShortcutResult out;
+  out.path = request.path;
+  std::vector<Config>& q = out.path.waypoints;
+  HGRAPH_CHECK(q.size() >= 2);
+  std::vector<int>& ids = out.ids;
+  ids = request.ids;
+  if (ids.size() != q.size()) ids.assign(q.size(), -1);
+  std::vector<WaypointSource>& sources = out.sources;
+  sources = request.sources;
+  if (sources.size() != q.size()) sources.assign(q.size(), WaypointSource{});
+  std::vector<EdgeReport>& edges = out.edges;
+  edges = request.edges;
+  if (edges.size() != q.size() - 1) {
+    edges.assign(q.size() - 1, EdgeReport{});
+    for (size_t j = 0; j + 1 < q.size(); ++j) edges[j].length = space.Distance(q[j], q[j + 1]);
+  }
+
+  const Shortening shortening{.checker = checker,
+                              .request = request,
+                              .cancel = cancel,
+                              .space = space,
+                              .threads = threads,
+                              .lazy = lazy,
+                              .out = out};
+  DropWaypoints(shortening);
+  TryRandomPairs(shortening);
+  if (request.corners_only && q.size() >= 3) CutCorners(shortening);
   return out;
 }
 
