@@ -128,6 +128,14 @@ EdgeReport JoinParts(const std::vector<EdgePart>& parts) {
   return out;
 }
 
+// What a check report says of its motion, in one byte: 0 unchecked, else its state, whether
+// it carries a profile and whether it is certified (a later check adds one or the other).
+uint8_t KnownOf(const EdgeReport& report) {
+  if (report.state == EdgeState::kUnchecked) return 0;
+  return static_cast<uint8_t>((report.state == EdgeState::kValid ? 1 : 2) |
+                              (report.has_clearance ? 4 : 0) | (report.certified ? 8 : 0));
+}
+
 }  // namespace
 
 int ResolveThreads(int threads) {
@@ -816,6 +824,8 @@ MergeResult HybridizationSession::Query(const MeasureSpec& spec, const ProgressC
       session->evidence_.Truncate(nodes, edges);
     }
   } drop_overlay{this, base_nodes, base_edges};
+  std::vector<uint8_t> known_before(static_cast<size_t>(base_edges));
+  for (int e = 0; e < base_edges; ++e) known_before[e] = KnownOf(graph_.edge(e).report);
 
   Clock::time_point phase = Clock::now();
   if (options_.evaluation == Evaluation::kEager) {
@@ -943,14 +953,17 @@ MergeResult HybridizationSession::Query(const MeasureSpec& spec, const ProgressC
   result.stats.collision_checks += checker_->total_collision_checks() - checks_before;
   result.stats.distance_queries += checker_->total_distance_queries() - queries_before;
   result.stats.edges_checked += rechecked;
-  int64_t checked_edges = 0;
+  // Of the stored H-Graph's own edges: the valid ones, and those whose stored check served this
+  // query as it was (checked before it, and nothing more learnt of them since).
   result.stats.edges_valid = 0;
-  for (int e = 0; e < graph_.num_edges(); ++e) {
-    const EdgeState state = graph_.edge(e).report.state;
-    if (state != EdgeState::kUnchecked) ++checked_edges;
-    if (state == EdgeState::kValid) ++result.stats.edges_valid;
+  result.stats.edges_reused = 0;
+  for (int e = 0; e < base_edges; ++e) {
+    const EdgeReport& report = graph_.edge(e).report;
+    if (report.state == EdgeState::kValid) ++result.stats.edges_valid;
+    if (!first && known_before[e] != 0 && known_before[e] == KnownOf(report)) {
+      ++result.stats.edges_reused;
+    }
   }
-  result.stats.edges_reused = first ? 0 : checked_edges - rechecked;
   result.timing.total_ms += MsSince(started);
   return result;
 }

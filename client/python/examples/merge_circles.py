@@ -2,7 +2,8 @@
 """Merges the two input paths of OMPL's circles problem on a running hgraph server, then
 re-queries the same H-Graph for clearance without new collision checks.
 
-    /usr/bin/python3 -m pip install ./client/python   # or PYTHONPATH=client/python:build/python
+    /usr/bin/python3 -m pip install --no-deps --no-build-isolation --target DIR ./client/python
+    # then PYTHONPATH=DIR (or PYTHONPATH=client/python:build/python from a build)
     /usr/bin/python3 client/python/examples/merge_circles.py --server localhost:50051
 """
 import argparse
@@ -32,8 +33,11 @@ def main() -> int:
 
         merged = client.merge(paths, measure="length", variant="all-pairs", on_progress=show)
         r = merged.result
-        print(f"merged: length {r.quality.length:.3f} (best input "
-              f"{r.inputs[r.best_input].quality.length:.3f}), "
+        # best_input is -1 when no input was checked whole (a lazy merge checks only what its
+        # search needs): an index of -1 would silently name the last input.
+        best = (f"best input {r.inputs[r.best_input].quality.length:.3f}" if r.best_input >= 0
+                else "no input checked whole")
+        print(f"merged: length {r.quality.length:.3f} ({best}), "
               f"{r.stats.collision_checks} collision checks, H-Graph {merged.hgraph}")
         again = client.requery(merged.hgraph, measure="bottleneck-clearance")
         print(f"requery bottleneck-clearance: min clearance {again.quality.min_clearance:.3f}, "
