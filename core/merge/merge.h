@@ -22,7 +22,7 @@
 
 namespace hgraph {
 
-// How the H-Graph's edges are checked (DESIGN.md, "Evaluation is lazy").
+// How the H-Graph's edges are checked (docs/design.md, "Evaluation is lazy").
 enum class Evaluation {
   // Edges enter unchecked with the measure's bound on their cost; the search checks only the
   // edges of the path it would take and searches again until that path is fully checked

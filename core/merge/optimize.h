@@ -1,4 +1,4 @@
-// The anytime post-optimization of a query's H-Graph optimum (DESIGN.md, "Anytime
+// The anytime post-optimization of a query's H-Graph optimum (docs/design.md, "Anytime
 // post-optimization"; merge.proto MergeOptions.optimize_ms): rounds of certified shortcuts of
 // the best path, each re-hybridized with the H-Graph, a polish of corner cuts, and restarts from
 // the inputs. Everything it adds is the query's own overlay of the H-Graph (the query drops it

@@ -1,4 +1,4 @@
-// Certified partial shortcuts (the post-optimization of a merge, DESIGN.md "Anytime
+// Certified partial shortcuts (the post-optimization of a merge, docs/design.md, "Anytime
 // post-optimization"): a path is shortened by replacing the stretch between two of its points,
 // anywhere along its edges, by the straight motion between them when the local planner proves
 // that motion free (EdgeCheckRequest::certify). OMPL's PathSimplifier does the same with a

@@ -1,5 +1,5 @@
-// Input paths from OMPL's sampling-based planners, checked by our own MotionChecker (DESIGN.md
-// "core/plan"). OMPL is a private dependency: nothing here includes its headers.
+// Input paths from OMPL's sampling-based planners, checked by our own MotionChecker
+// (docs/design.md, "Layout"). OMPL is a private dependency: nothing here includes its headers.
 //
 // Planners (OMPL 1.5.2, the Debian package):
 //   prm         PRM without cycles, as in the paper: OMPL's PRM with a connection filter that

@@ -1,5 +1,5 @@
 // Configuration spaces: R^n, SO(2), SO(3), SE(2), SE(3) and products of them, with a weighted
-// metric, interpolation, bounds and validation (DESIGN.md "Core model").
+// metric, interpolation, bounds and validation (docs/design.md, "Core model").
 #pragma once
 
 #include <Eigen/Core>
