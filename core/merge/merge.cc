@@ -615,9 +615,14 @@ int64_t HybridizationSession::AddPaths(const std::vector<InputPath>& paths,
   build_stats_.input_edges += static_cast<int64_t>(input_edges.size());
   build_stats_.candidate_edges += static_cast<int64_t>(bridges.size());
   if (options_.evaluation == Evaluation::kEager) {
-    int64_t checked = 0;
-    CheckEdges(input_edges, EdgeNeed::kClearance, "inputs", progress, cancel, &checked);
-    CheckEdges(bridges, EdgeNeed::kValidity, "check", progress, cancel, &checked);
+    // The next query reports this work with its own (AddPaths answers with that query).
+    const int64_t checks_before = checker_->total_collision_checks();
+    const int64_t queries_before = checker_->total_distance_queries();
+    CheckEdges(input_edges, EdgeNeed::kClearance, "inputs", progress, cancel,
+               &unreported_.edges_checked);
+    CheckEdges(bridges, EdgeNeed::kValidity, "check", progress, cancel, &unreported_.edges_checked);
+    unreported_.collision_checks += checker_->total_collision_checks() - checks_before;
+    unreported_.distance_queries += checker_->total_distance_queries() - queries_before;
   }
   return static_cast<int64_t>(bridges.size());
 }
@@ -950,16 +955,25 @@ MergeResult HybridizationSession::Query(const MeasureSpec& spec, const ProgressC
   if (result.best_input >= 0) result.best_input_objective = measure->Objective(best_quality);
   result.timing.evaluate_ms += MsSince(phase);
 
-  result.stats.collision_checks += checker_->total_collision_checks() - checks_before;
-  result.stats.distance_queries += checker_->total_distance_queries() - queries_before;
-  result.stats.edges_checked += rechecked;
+  result.stats.collision_checks +=
+      checker_->total_collision_checks() - checks_before + unreported_.collision_checks;
+  result.stats.distance_queries +=
+      checker_->total_distance_queries() - queries_before + unreported_.distance_queries;
+  result.stats.edges_checked += rechecked + unreported_.edges_checked;
+  unreported_ = MergeStats{};
   // Of the stored H-Graph's own edges: the valid ones, and those whose stored check served this
   // query as it was (checked before it, and nothing more learnt of them since).
+  // Derived from the graph, not kept beside it: the input edges found invalid so far, after
+  // AddPaths and lazy checks too.
   result.stats.edges_valid = 0;
   result.stats.edges_reused = 0;
+  result.stats.input_edges_invalid = 0;
   for (int e = 0; e < base_edges; ++e) {
     const EdgeReport& report = graph_.edge(e).report;
     if (report.state == EdgeState::kValid) ++result.stats.edges_valid;
+    if (graph_.edge(e).input && report.state == EdgeState::kInvalid) {
+      ++result.stats.input_edges_invalid;
+    }
     if (!first && known_before[e] != 0 && known_before[e] == KnownOf(report)) {
       ++result.stats.edges_reused;
     }

@@ -89,7 +89,7 @@ const char* OptimizeStopName(OptimizeStop stop);
 struct MergeStats {
   int64_t nodes = 0;
   int64_t input_edges = 0;
-  int64_t input_edges_invalid = 0;
+  int64_t input_edges_invalid = 0;  // input edges found invalid so far
   int64_t candidate_edges = 0;
   int64_t edges_checked = 0;  // local-planner runs (inputs, bridges, clearance re-checks)
   int64_t edges_valid = 0;    // valid edges in the graph
@@ -247,6 +247,8 @@ class HybridizationSession {
   MergeStats build_stats_;
   MergeTiming build_timing_;
   bool first_query_ = true;
+  // Work done since the last query that no result has reported yet (an eager AddPaths' checks).
+  MergeStats unreported_;
   // The edges of the last query's result under a measure that needs no clearance (a length
   // merge's path, certified but not profiled unless report_clearance).
   std::vector<int> unprofiled_result_;

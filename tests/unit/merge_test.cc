@@ -655,6 +655,34 @@ TEST_F(MergeTest, EagerRequeryAfterPostOptimizationSeesTheHGraphAsBuilt) {
   }
 }
 
+// Stats derived from the H-Graph, not kept beside it: an eager AddPaths of a path through the
+// discs reports its invalid input edge in the next query (the count stayed at the build's), and
+// that query reports the AddPaths' checks with its own (they were dropped).
+TEST_F(MergeTest, AddPathsWorkAndInvalidInputsReachTheNextQuerysStats) {
+  const LocalPlanner planner = MakePlanner();
+  const std::vector<InputPath> inputs = CirclePaths();
+  HybridizationSession session(
+      planner, MergeRequest{.paths = inputs,
+                            .options = {.evaluation = Evaluation::kEager, .optimize_ms = 0}});
+  const MergeResult before = session.Query({});
+  EXPECT_EQ(before.stats.input_edges_invalid, 0);
+  const MergeResult again = session.Query({});
+  EXPECT_EQ(again.stats.edges_checked, 0);
+  const InputPath straight{.name = "straight",
+                           .waypoints = {inputs[0].waypoints.front(), inputs[0].waypoints.back()}};
+  // Start and goal only: no new node, so no bridge; one input edge, which the AddPaths checks.
+  EXPECT_EQ(session.AddPaths({straight}), 0);
+  const MergeResult after = session.Query({});
+  EXPECT_EQ(after.stats.input_edges_invalid, 1);
+  EXPECT_GE(after.stats.edges_checked, 1);
+  EXPECT_GT(after.stats.collision_checks, 0);
+  // Reported once: the query after it did no work of its own.
+  const MergeResult later = session.Query({});
+  EXPECT_EQ(later.stats.edges_checked, 0);
+  EXPECT_EQ(later.stats.collision_checks, 0);
+  EXPECT_EQ(later.stats.input_edges_invalid, 1);
+}
+
 TEST_F(MergeTest, InvalidInputEdgeIsReportedAndNotUsed) {
   const LocalPlanner planner = MakePlanner();
   std::vector<InputPath> inputs = CirclePaths();
