@@ -78,7 +78,9 @@ struct Problem {
   std::string file;
   std::shared_ptr<const Scene> scene;
   std::shared_ptr<const CollisionWorld> world;
+  // With the clearance bound where the scene gets one (the defaults), and without it.
   std::unique_ptr<LocalPlanner> planner;
+  std::unique_ptr<LocalPlanner> exact_planner;
   double resolution = 0.01;
   std::vector<InputPath> inputs;
   std::vector<double> input_lengths;
@@ -98,6 +100,7 @@ struct Method {
   std::string name;
   std::string label;  // for tables and the chart
   bool ompl = false;  // counts towards "best certified OMPL"
+  bool exact_clearance = false;  // runs on Problem::exact_planner (no clearance bound)
   std::function<Output(const MotionChecker&, const Problem&)> run;
 };
 
@@ -185,9 +188,10 @@ Summary Summarize(const Method& m, const std::vector<Run>& runs) {
 
 Run RunOnce(const Method& m, const Problem& p, double k) {
   Run r;
-  CountingChecker counter(*p.planner);
-  const int64_t cc0 = p.planner->total_collision_checks();
-  const int64_t dq0 = p.planner->total_distance_queries();
+  const LocalPlanner& planner = m.exact_clearance ? *p.exact_planner : *p.planner;
+  CountingChecker counter(planner);
+  const int64_t cc0 = planner.total_collision_checks();
+  const int64_t dq0 = planner.total_distance_queries();
   Output out;
   const auto t0 = std::chrono::steady_clock::now();
   try {
@@ -197,16 +201,17 @@ Run RunOnce(const Method& m, const Problem& p, double k) {
     return r;
   }
   r.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-  r.collision_checks = p.planner->total_collision_checks() - cc0;
-  r.distance_queries = p.planner->total_distance_queries() - dq0;
+  r.collision_checks = planner.total_collision_checks() - cc0;
+  r.distance_queries = planner.total_distance_queries() - dq0;
   // The merge counts its own local-planner runs (MergeStats::edges_checked); the others are
   // counted at the checker.
   r.edges_checked = out.engine_edges_checked >= 0 ? out.engine_edges_checked : counter.edges();
   r.search_rounds = out.search_rounds;
   r.objective = out.objective;
   r.hgraph_objective = out.hgraph_objective;
+  // Judged with exact clearances, whatever checker the method ran on.
   const PathCheckResult check =
-      CheckPaths(*p.planner, PathCheckRequest{.paths = {out.path}, .k = k});
+      CheckPaths(*p.exact_planner, PathCheckRequest{.paths = {out.path}, .k = k});
   const InputReport& rep = check.paths.at(0);
   r.ok = true;
   r.valid = rep.valid;
@@ -250,6 +255,11 @@ Method HgraphMethod(const std::string& name, const std::string& label, MeasureSp
 std::vector<Method> Methods(const Problem& p, bool inverse_clearance_pair, uint64_t seed) {
   std::vector<Method> m;
   m.push_back(HgraphMethod("hgraph-defaults", "hgraph defaults", {}, {}));
+  // The defaults on a checker without the clearance bound: what the bound gains and costs.
+  Method exact = HgraphMethod("hgraph-defaults-exact-clearance",
+                              "hgraph defaults, exact clearance only", {}, {});
+  exact.exact_clearance = true;
+  m.push_back(std::move(exact));
   m.push_back(HgraphMethod("hgraph-eager-all-pairs", "hgraph eager all-pairs", {},
                            MergeOptions{.candidates = {.variant = Variant::kAllPairs},
                                         .evaluation = Evaluation::kEager}));
@@ -310,7 +320,19 @@ Problem LoadProblem(const std::string& name, const std::string& file, const fs::
   p.resolution = SceneResolution(proto);
   p.scene = SceneFromProto(proto, fs::path(file).parent_path().string(), {});
   p.world = std::make_shared<const CollisionWorld>(p.scene);
-  p.planner =
+  const auto b0 = std::chrono::steady_clock::now();
+  const auto bound = BuildClearanceBound(p.world);
+  std::cerr << name << ": clearance bound "
+            << (bound ? std::to_string(ClearanceBoundBytes(*bound)) + " bytes, built in " +
+                            std::to_string(std::chrono::duration<double, std::milli>(
+                                               std::chrono::steady_clock::now() - b0)
+                                               .count()) +
+                            " ms"
+                      : std::string("none"))
+            << "\n";
+  p.planner = std::make_unique<LocalPlanner>(
+      p.world, LocalPlannerOptions{.resolution = p.resolution, .clearance_bound = bound});
+  p.exact_planner =
       std::make_unique<LocalPlanner>(p.world, LocalPlannerOptions{.resolution = p.resolution});
   const fs::path inputs_file = out_dir / "inputs" / (name + ".json");
   if (fs::exists(inputs_file)) {
@@ -548,6 +570,8 @@ int Main(int argc, char** argv) {
   app.add_option("--plan-time", plan_time_s, "PRM budget per input path, seconds");
   app.add_option("--seed", seed, "PRM and simplifier seed");
   app.add_option("--out", out, "output folder (inputs are cached in <out>/inputs)");
+  std::vector<std::string> only_methods;
+  app.add_option("--methods", only_methods, "run only these methods (names as in results.json)");
   app.add_option("--inverse-clearance-scenes", ic_scenes,
                  "scenes that also run inverse clearance k=3, all-pairs, node spacing 1, lazy "
                  "and eager");
@@ -558,6 +582,8 @@ int Main(int argc, char** argv) {
   for (const auto& s : scene_names) command += " " + s;
   command += " --inverse-clearance-scenes";
   for (const auto& s : ic_scenes) command += " " + s;
+  if (!only_methods.empty()) command += " --methods";
+  for (const auto& s : only_methods) command += " " + s;
 
   const fs::path source(HGRAPH_SOURCE_DIR);
   const fs::path out_dir(out);
@@ -579,7 +605,12 @@ int Main(int argc, char** argv) {
                                        : fs::path(name).stem().string();
     Problem p = LoadProblem(short_name, file.string(), out_dir, count, plan_time_s, seed);
     const bool ic = std::find(ic_scenes.begin(), ic_scenes.end(), short_name) != ic_scenes.end();
-    const std::vector<Method> methods = Methods(p, ic, seed);
+    std::vector<Method> methods = Methods(p, ic, seed);
+    if (!only_methods.empty()) {
+      std::erase_if(methods, [&](const Method& m) {
+        return std::find(only_methods.begin(), only_methods.end(), m.name) == only_methods.end();
+      });
+    }
     std::vector<std::vector<Run>> runs_by_method(methods.size());
     for (int r = 0; r < runs; ++r) {
       // Interleaved, and the order rotates each run so no method always runs first.
