@@ -35,7 +35,7 @@ class SceneStore {
   // With clearance_bound, every scene loaded gets its clearance bound too (built once, cached
   // with its collision world and counted with it in the cache's budget).
   SceneStore(ResourceCache& cache, ServiceMetrics& metrics, MeshImporter importer,
-             bool clearance_bound = true);
+             bool clearance_bound = false);
   SceneStore(const SceneStore&) = delete;
   SceneStore& operator=(const SceneStore&) = delete;
 

@@ -36,11 +36,8 @@ LoadedScene LoadScene(v1::Scene proto, const std::string& path, double resolutio
                                 BlobResolver());
   loaded.resolution = resolution;
   loaded.world = std::make_shared<const CollisionWorld>(loaded.scene);
-  // Certificates ask the scene's clearance bound first (core/motion/local_planner.h); `hgraph
-  // check` (LocalPathChecker) stays on exact clearances, the judge of every output.
-  loaded.planner = std::make_unique<LocalPlanner>(
-      loaded.world, LocalPlannerOptions{.resolution = resolution,
-                                        .clearance_bound = BuildClearanceBound(loaded.world)});
+  loaded.planner =
+      std::make_unique<LocalPlanner>(loaded.world, LocalPlannerOptions{.resolution = resolution});
   return loaded;
 }
 
