@@ -10,8 +10,8 @@
 #include <string>
 
 #include "core/collision/collision_world.h"
-#include "core/motion/local_planner.h"
 #include "core/common/progress.h"
+#include "core/motion/local_planner.h"
 #include "hgraph/v1/scene.pb.h"
 #include "server/mesh_importer.h"
 #include "server/metrics.h"

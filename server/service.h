@@ -39,7 +39,7 @@ struct ServerOptions {
   // on the bench's problems it saves 6-36% of the distance queries but at most 14% of a merge's
   // time (docs/performance.md).
   bool clearance_bound = false;
-  Authenticator auth;            // --auth-tokens: who a call comes from (open without it)
+  Authenticator auth;  // --auth-tokens: who a call comes from (open without it)
   // An UploadBlob stream that sends nothing for this long is aborted (ExpireIdleUploads).
   std::chrono::milliseconds upload_idle_timeout{std::chrono::seconds(30)};
 };

@@ -54,8 +54,8 @@ std::shared_ptr<const ClearanceBound> ClearanceBound::Build(
     std::shared_ptr<const CollisionWorld> world, const ClearanceBoundOptions& options) {
   HGRAPH_CHECK(world != nullptr);
   if (!(options.cell_size >= 0) || !std::isfinite(options.cell_size)) {
-    throw InputError("cell_size", "must be 0 (automatic) or positive, got " +
-                                      limits::Num(options.cell_size));
+    throw InputError("cell_size",
+                     "must be 0 (automatic) or positive, got " + limits::Num(options.cell_size));
   }
   if (options.target_cells < 1 || options.max_cells < options.target_cells) {
     throw InputError("target_cells", "must be at least 1 and at most max_cells (" +

@@ -23,8 +23,8 @@ DistanceField::DistanceField(const CollisionWorld& world, const Eigen::AlignedBo
     const double n = std::floor(box.sizes()[d] / cell_size) + 2;
     total *= n;
     if (!(total <= static_cast<double>(max_cells))) {
-      throw InputError("max_cells", "a grid of spacing " + limits::Num(cell_size) + " over a box of " +
-                                        limits::Num(box.sizes().maxCoeff()) +
+      throw InputError("max_cells", "a grid of spacing " + limits::Num(cell_size) +
+                                        " over a box of " + limits::Num(box.sizes().maxCoeff()) +
                                         " needs more than " + limits::Num(max_cells) + " points");
     }
     counts_[d] = static_cast<int>(n);
@@ -44,7 +44,8 @@ DistanceField::DistanceField(const CollisionWorld& world, const Eigen::AlignedBo
       for (int64_t k = 0; k < counts_[2]; ++k) {
         const double d = std::max(0.0, context->ObstacleDistance(Point(i, j, k)));
         // Rounded down: the stored value must never exceed the distance.
-        float f = static_cast<float>(std::min(d, static_cast<double>(std::numeric_limits<float>::max())));
+        float f =
+            static_cast<float>(std::min(d, static_cast<double>(std::numeric_limits<float>::max())));
         if (static_cast<double>(f) > d) f = std::nextafter(f, 0.0f);
         values_[i * stride_[0] + j * stride_[1] + k] = f;
       }

@@ -33,8 +33,8 @@ CoverSphere TriangleSphere(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
   const Eigen::Vector3d v = c - a;
   const Eigen::Vector3d w = u.cross(v);
   if ((*p[i] - *p[k]).dot(*p[j] - *p[k]) > 0 && w.squaredNorm() > 0) {
-    centre = a + (u.squaredNorm() * v.cross(w) + v.squaredNorm() * w.cross(u)) /
-                     (2 * w.squaredNorm());
+    centre =
+        a + (u.squaredNorm() * v.cross(w) + v.squaredNorm() * w.cross(u)) / (2 * w.squaredNorm());
   }
   const double r = std::max({(a - centre).norm(), (b - centre).norm(), (c - centre).norm()});
   return CoverSphere{.centre = centre, .radius = r * (1 + kRadiusSlack) + kRadiusSlack};
@@ -108,10 +108,9 @@ int BuildTree(SphereCover& cover, std::vector<int>& order, int begin, int end) {
   int axis = 0;
   box.sizes().maxCoeff(&axis);
   const int mid = begin + (end - begin) / 2;
-  std::nth_element(order.begin() + begin, order.begin() + mid, order.begin() + end,
-                   [&](int x, int y) {
-                     return cover.spheres[x].centre[axis] < cover.spheres[y].centre[axis];
-                   });
+  std::nth_element(
+      order.begin() + begin, order.begin() + mid, order.begin() + end,
+      [&](int x, int y) { return cover.spheres[x].centre[axis] < cover.spheres[y].centre[axis]; });
   const int left = BuildTree(cover, order, begin, mid);
   const int right = BuildTree(cover, order, mid, end);
   const Eigen::Vector3d centre = box.center();
@@ -150,16 +149,13 @@ double PairBound(const SphereCover& a, const Eigen::Isometry3d& pa, int na, cons
 
 SphereCover CoverShape(const Shape& shape, double max_radius, int max_pieces) {
   if (!std::isfinite(max_radius) || max_radius <= 0) {
-    throw InputError("max_radius", "must be positive and finite, got " + std::to_string(max_radius));
+    throw InputError("max_radius",
+                     "must be positive and finite, got " + std::to_string(max_radius));
   }
   SphereCover cover;
   switch (shape.type) {
-    case ShapeType::kSphere:
-      cover.spheres.push_back({.radius = shape.radius});
-      break;
-    case ShapeType::kBox:
-      CoverBox(shape.box_size, max_radius, max_pieces, cover.spheres);
-      break;
+    case ShapeType::kSphere: cover.spheres.push_back({.radius = shape.radius}); break;
+    case ShapeType::kBox: CoverBox(shape.box_size, max_radius, max_pieces, cover.spheres); break;
     case ShapeType::kCylinder: {
       // Slabs along the axis, each in the sphere through its rims.
       const double slab = 2 * std::max(shape.radius, max_radius);

@@ -196,7 +196,8 @@ class EdgeCheck {
 LocalPlanner::LocalPlanner(std::shared_ptr<const CollisionWorld> world, LocalPlannerOptions options)
     : world_(std::move(world)), options_(options), impl_(std::make_unique<Impl>()) {
   HGRAPH_CHECK(world_ != nullptr);
-  HGRAPH_CHECK(options_.clearance_bound == nullptr || &options_.clearance_bound->world() == world_.get());
+  HGRAPH_CHECK(options_.clearance_bound == nullptr ||
+               &options_.clearance_bound->world() == world_.get());
   if (!std::isfinite(options_.resolution) || options_.resolution <= 0) {
     throw InputError("resolution",
                      "must be positive and finite, got " + std::to_string(options_.resolution));

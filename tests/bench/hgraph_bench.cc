@@ -98,8 +98,8 @@ struct Output {
 
 struct Method {
   std::string name;
-  std::string label;  // for tables and the chart
-  bool ompl = false;  // counts towards "best certified OMPL"
+  std::string label;             // for tables and the chart
+  bool ompl = false;             // counts towards "best certified OMPL"
   bool clearance_bound = false;  // runs on Problem::bound_planner
   std::function<Output(const MotionChecker&, const Problem&)> run;
 };

@@ -250,8 +250,8 @@ TEST(ClearanceBoundTest, MergedPathsWithTheBoundAreCertifiedExactly) {
   ASSERT_NE(bound, nullptr);
   const LocalPlanner exact(world);
   const LocalPlanner bounded(world, {.clearance_bound = bound});
-  const std::vector<InputPath> inputs = LoadPathsFile(
-      kRoot + "/tests/bench/results/seed1/inputs/hole_wall.json", world->space());
+  const std::vector<InputPath> inputs =
+      LoadPathsFile(kRoot + "/tests/bench/results/seed1/inputs/hole_wall.json", world->space());
   const MergeResult merged = Merge(bounded, MergeRequest{.paths = inputs});
   EXPECT_GT(bounded.total_bound_queries(), 0);
   const PathCheckResult check = CheckPaths(exact, PathCheckRequest{.paths = {merged.path}});
