@@ -39,6 +39,7 @@ struct Flags {
   int max_waypoints = 100000;
   int max_sessions = 1000;
   int64_t cache_bytes = int64_t{2} << 30;
+  bool clearance_bound = false;
   int64_t max_blob_bytes = int64_t{256} << 20;
   double session_ttl_s = 3600;
   double grace_s = 10;
@@ -90,6 +91,9 @@ int main(int argc, char** argv) {
                  "memory budget of blobs, scenes, collision worlds and H-Graphs (LRU eviction)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
+  app.add_flag("--clearance-bound", flags.clearance_bound,
+               "certify motions with a per-scene distance field first, FCL's exact distance only "
+               "where it cannot decide (built once per scene, counted in --cache-bytes)");
   app.add_option("--max-blob-bytes", flags.max_blob_bytes, "largest uploaded blob")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
@@ -177,6 +181,7 @@ int main(int argc, char** argv) {
                       .cpu_s = flags.mesh_import_cpu_s,
                       .timeout = std::chrono::milliseconds(
                           static_cast<int64_t>(flags.mesh_import_timeout_s * 1e3))},
+      .clearance_bound = flags.clearance_bound,
       .upload_idle_timeout =
           std::chrono::milliseconds(static_cast<int64_t>(flags.upload_idle_timeout_s * 1e3))};
 

@@ -102,8 +102,9 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
 
     auto stored = std::make_shared<StoredHGraph>();
     stored->scene = scene;
-    stored->planner =
-        std::make_unique<LocalPlanner>(scene.world, LocalPlannerOptions{.resolution = resolution});
+    stored->planner = std::make_unique<LocalPlanner>(
+        scene.world,
+        LocalPlannerOptions{.resolution = resolution, .clearance_bound = scene.clearance_bound});
     try {
       stored->session = std::make_unique<HybridizationSession>(*stored->planner, merge);
     } catch (const Error& e) {

@@ -99,7 +99,9 @@ class PathMergerService::PlanCall final : public grpc::ServerWriteReactor<v1::Pl
       }
       Pump(/*write_done=*/false);
     };
-    LocalPlanner checker(scene.world, LocalPlannerOptions{.resolution = plan.resolution});
+    LocalPlanner checker(scene.world,
+                         LocalPlannerOptions{.resolution = plan.resolution,
+                                             .clearance_bound = scene.clearance_bound});
     ::hgraph::PlanPaths(checker, plan);
   }
 

@@ -13,6 +13,13 @@
 namespace hgraph::server {
 namespace {
 
+// What the cache keeps per scene beside its message: the collision world and its clearance
+// bound, one entry so that they are counted, kept and evicted together.
+struct SceneGeometry {
+  std::shared_ptr<const CollisionWorld> world;
+  std::shared_ptr<const ClearanceBound> clearance_bound;
+};
+
 // Deterministic encoding: the same Scene message always yields the same bytes, hence digest.
 std::string CanonicalBytes(const v1::Scene& scene) {
   std::string bytes;
@@ -81,8 +88,12 @@ void ValidateDigest(const v1::Digest& digest, const std::string& field) {
   }
 }
 
-SceneStore::SceneStore(ResourceCache& cache, ServiceMetrics& metrics, MeshImporter importer)
-    : cache_(cache), metrics_(metrics), importer_(std::move(importer)) {}
+SceneStore::SceneStore(ResourceCache& cache, ServiceMetrics& metrics, MeshImporter importer,
+                       bool clearance_bound)
+    : cache_(cache),
+      metrics_(metrics),
+      importer_(std::move(importer)),
+      clearance_bound_(clearance_bound) {}
 
 bool SceneStore::HasBlob(const v1::Digest& digest) const {
   auto blob = cache_.Get<const std::string>(CacheKind::kBlob, digest.sha256());
@@ -153,12 +164,12 @@ LoadedScene SceneStore::Get(const v1::Digest& digest, const std::string& field,
   std::promise<LoadedScene> promise;
   {
     std::lock_guard lock(loading_mutex_);
-    if (auto world = cache_.Get<const CollisionWorld>(CacheKind::kWorld, sha)) {
+    if (auto geometry = cache_.Get<const SceneGeometry>(CacheKind::kWorld, sha)) {
       auto proto = cache_.Get<const v1::Scene>(CacheKind::kScene, sha);
       if (proto) {
         CheckSceneSize(*proto, digest, field);
         metrics_.scene_cache_hits.Increment();
-        return LoadedScene{proto, world};
+        return LoadedScene{proto, geometry->world, geometry->clearance_bound};
       }
     }
     if (auto it = loading_.find(sha); it != loading_.end()) {
@@ -217,17 +228,22 @@ LoadedScene SceneStore::Load(const v1::Digest& digest, const std::string& field,
     if (e.code() == ErrorCode::kNotFound) throw Error(ErrorCode::kNotFound, field, e.what());
     throw;
   }
-  auto world = std::make_shared<const CollisionWorld>(scene);
+  auto geometry = std::make_shared<SceneGeometry>();
+  geometry->world = std::make_shared<const CollisionWorld>(scene);
+  if (clearance_bound_) geometry->clearance_bound = BuildClearanceBound(geometry->world);
+  const size_t bytes =
+      geometry->world->memory_bytes() +
+      (geometry->clearance_bound ? ClearanceBoundBytes(*geometry->clearance_bound) : 0);
   metrics_.scene_loads.Increment();
   // A world that cannot be kept would be loaded again by every call that names the scene.
-  if (!cache_.Put(CacheKind::kWorld, sha, world, world->memory_bytes())) {
+  if (!cache_.Put(CacheKind::kWorld, sha, geometry, bytes)) {
     throw Error(ErrorCode::kResourceExhausted, field,
-                "scene sha256:" + sha + " needs " + std::to_string(world->memory_bytes()) +
-                    " bytes of collision geometry, more than the server's cache budget "
-                    "(--cache-bytes=" +
+                "scene sha256:" + sha + " needs " + std::to_string(bytes) +
+                    " bytes of collision geometry and clearance bound, more than the server's "
+                    "cache budget (--cache-bytes=" +
                     std::to_string(cache_.budget_bytes()) + ")");
   }
-  return LoadedScene{proto, world};
+  return LoadedScene{proto, geometry->world, geometry->clearance_bound};
 }
 
 }  // namespace hgraph::server

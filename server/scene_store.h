@@ -11,6 +11,7 @@
 
 #include "core/collision/collision_world.h"
 #include "core/common/progress.h"
+#include "core/motion/local_planner.h"
 #include "hgraph/v1/scene.pb.h"
 #include "server/mesh_importer.h"
 #include "server/metrics.h"
@@ -22,13 +23,19 @@ namespace hgraph::server {
 struct LoadedScene {
   std::shared_ptr<const v1::Scene> proto;
   std::shared_ptr<const CollisionWorld> world;
+  // The world's cheap lower bound on clearance (BuildClearanceBound), for every local planner
+  // of the scene; null where none pays or the server runs without it.
+  std::shared_ptr<const ClearanceBound> clearance_bound;
 };
 
 // Thread safe. Not copyable.
 class SceneStore {
  public:
   // Mesh bytes are parsed by `importer`, in a child process per mesh.
-  SceneStore(ResourceCache& cache, ServiceMetrics& metrics, MeshImporter importer);
+  // With clearance_bound, every scene loaded gets its clearance bound too (built once, cached
+  // with its collision world and counted with it in the cache's budget).
+  SceneStore(ResourceCache& cache, ServiceMetrics& metrics, MeshImporter importer,
+             bool clearance_bound = false);
   SceneStore(const SceneStore&) = delete;
   SceneStore& operator=(const SceneStore&) = delete;
 
@@ -58,6 +65,7 @@ class SceneStore {
   ResourceCache& cache_;
   ServiceMetrics& metrics_;
   MeshImporter importer_;
+  bool clearance_bound_;
   std::mutex loading_mutex_;
   std::map<std::string, std::shared_future<LoadedScene>> loading_;
 };

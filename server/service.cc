@@ -17,7 +17,7 @@ PathMergerService::PathMergerService(const ServerOptions& options, Metrics& metr
       metrics_(metrics),
       families_(metrics),
       cache_(options.cache_bytes),
-      scenes_(cache_, families_, MeshImporter(options.mesh_import)),
+      scenes_(cache_, families_, MeshImporter(options.mesh_import), options.clearance_bound),
       sessions_(options.max_sessions, options.session_ttl),
       pool_(options.threads, options.max_admitted) {
   metrics_.AddCollector([this] {

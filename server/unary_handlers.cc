@@ -252,7 +252,9 @@ grpc::ServerUnaryReactor* PathMergerService::CheckPaths(grpc::CallbackServerCont
         if (request->has_k()) limits::RequireRange(request->k(), 0, limits::kMaxK, "k");
         const double resolution =
             request->has_resolution() ? request->resolution() : SceneResolution(*scene.proto);
-        const LocalPlanner planner(scene.world, LocalPlannerOptions{.resolution = resolution});
+        const LocalPlanner planner(scene.world,
+                                   LocalPlannerOptions{.resolution = resolution,
+                                                       .clearance_bound = scene.clearance_bound});
         // The same check as a merge's inputs (core/merge/path_check.h), on this call's share of
         // the worker pool.
         const PathCheckResult result = ::hgraph::CheckPaths(

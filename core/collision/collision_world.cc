@@ -244,12 +244,19 @@ double CollisionWorld::BodyRadius(int body) const {
   return impl_->body_radius[body];
 }
 
+const std::vector<std::pair<int, int>>& CollisionWorld::SelfPairs() const {
+  return impl_->self_pairs;
+}
+
 size_t CollisionWorld::memory_bytes() const { return impl_->memory_bytes; }
 
 struct CollisionContext::Impl {
   std::vector<std::unique_ptr<fcl::CollisionObjectd>> bodies;
   CollideData collide;
   DistanceData distance;
+  // A point (a sphere of radius 0, which FCL measures analytically against triangles and
+  // primitives) for ObstacleDistance; its own geometry, so no other thread's object shares it.
+  std::unique_ptr<fcl::CollisionObjectd> point;
 };
 
 CollisionContext::CollisionContext(const CollisionWorld& world)
@@ -259,6 +266,7 @@ CollisionContext::CollisionContext(const CollisionWorld& world)
   }
   impl_->distance.request.distance_tolerance = kGjkDistanceTolerance;
   impl_->distance.request.gjk_solver_type = kDistanceSolver;
+  impl_->point = std::make_unique<fcl::CollisionObjectd>(std::make_shared<fcl::Sphered>(0.0));
 }
 
 CollisionContext::~CollisionContext() = default;
@@ -337,6 +345,19 @@ double CollisionContext::Clearance(const Config& q, ClearanceWitness* witness) {
     witness->other_body = near_other;
     witness->other_point = near_other >= 0 ? local(near_other, data.nearest[1]) : data.nearest[1];
   }
+  return data.min_distance;
+}
+
+double CollisionContext::ObstacleDistance(const Eigen::Vector3d& point) {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.translation() = point;
+  SetPose(*impl_->point, pose);
+  DistanceData& data = impl_->distance;
+  data.min_distance = std::numeric_limits<double>::infinity();
+  data.request.enable_nearest_points = false;
+  data.body = impl_->point.get();
+  data.found = false;
+  world_.impl().obstacle_manager.distance(impl_->point.get(), &data, DistanceCallback);
   return data.min_distance;
 }
 

@@ -8,6 +8,7 @@
 #include <atomic>
 #include <cstdint>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include "core/scene/scene.h"
@@ -43,6 +44,9 @@ class CollisionWorld {
   // Largest distance from the origin of body i's driving frame to any point of the body: bounds
   // how far a body point moves when the frame turns (core/motion's clearance certificate).
   double BodyRadius(int body) const;
+  // The pairs of robot bodies whose distance counts towards clearance (self-collision on, and
+  // driven by different components), i < j.
+  const std::vector<std::pair<int, int>>& SelfPairs() const;
 
   // Approximate memory held by the geometry, in bytes (for cache budgets).
   size_t memory_bytes() const;
@@ -73,6 +77,12 @@ class CollisionContext {
   // With a witness: also where the clearance was found (body -1 when nothing was measured or
   // the robot is in contact or out of bounds).
   double Clearance(const Config& q, ClearanceWitness* witness = nullptr);
+
+  // Distance from a world point to the nearest obstacle (mesh surfaces, solid primitives; 0 on or
+  // inside a primitive); +infinity without obstacles. The robot plays no part, and no query is
+  // counted: core/distance samples the static world with it once per scene, beside the
+  // merge's own queries.
+  double ObstacleDistance(const Eigen::Vector3d& point);
 
   int64_t collision_checks() const { return collision_checks_; }
   int64_t distance_queries() const { return distance_queries_; }

@@ -9,6 +9,7 @@
 
 #include "core/common/error.h"
 #include "core/common/limits.h"
+#include "core/distance/clearance_bound.h"
 
 namespace hgraph {
 namespace {
@@ -49,6 +50,7 @@ struct LocalPlanner::Impl {
   tbb::enumerable_thread_specific<std::unique_ptr<CollisionContext>> contexts;
   std::atomic<int64_t> collision_checks{0};
   std::atomic<int64_t> distance_queries{0};
+  std::atomic<int64_t> bound_queries{0};
   std::vector<int> body_component;
   std::vector<double> body_radius;
 };
@@ -72,13 +74,75 @@ class EdgeCheck {
  public:
   EdgeCheck(const Space& space, const std::vector<int>& body_component,
             const std::vector<double>& body_radius, CollisionContext& context, const Config& from,
-            const Config& to)
+            const Config& to, const ClearanceBound* bound = nullptr,
+            std::atomic<int64_t>* bound_total = nullptr)
       : space_(space),
         body_component_(body_component),
         body_radius_(body_radius),
         context_(context),
         from_(from),
-        to_(to) {}
+        to_(to),
+        bound_(bound),
+        bound_total_(bound_total) {}
+  ~EdgeCheck() {
+    if (bound_total_ != nullptr) *bound_total_ += bound_queries_;
+  }
+  EdgeCheck(const EdgeCheck&) = delete;
+  EdgeCheck& operator=(const EdgeCheck&) = delete;
+
+  // A clearance for a certificate, at most the exact one: the bound's where it is positive (a
+  // bound at or below 0 decides nothing, and only an exact query may find a collision), else
+  // the exact one.
+  struct Bounded {
+    double t = 0;
+    double clearance = 0;
+    bool exact = false;
+  };
+  Bounded CertClearance(double t, const Config& q) {
+    if (bound_ != nullptr) {
+      ++bound_queries_;
+      const double lower = bound_->LowerBound(q);
+      if (lower > 0) return Bounded{.t = t, .clearance = lower, .exact = false};
+    }
+    return Bounded{.t = t, .clearance = context_.Clearance(q), .exact = true};
+  }
+  // Replaces a bound by the exact clearance. Returns false (and records where) if the sample
+  // is in contact.
+  bool MakeExact(Bounded& s, const Config& q) {
+    if (!s.exact) {
+      s.clearance = context_.Clearance(q);
+      s.exact = true;
+    }
+    if (s.clearance <= 0) {
+      invalid_at_ = s.t;
+      return false;
+    }
+    return true;
+  }
+
+  // Refine for the certificate without a profile: the same halvings, on bounds first; a stretch
+  // the bounds cannot certify has its ends measured exactly before it is halved, so it is halved
+  // exactly where exact clearances would halve it. `lo` and `hi` keep what was measured.
+  bool Certify(Bounded& lo, const Config& q_lo, Bounded& hi, const Config& q_hi, int depth,
+               int max_depth) {
+    const double need = MotionBound(q_lo, q_hi);
+    if (lo.clearance + hi.clearance > need) return true;
+    if (!MakeExact(lo, q_lo) || !MakeExact(hi, q_hi)) return false;
+    if (lo.clearance + hi.clearance > need) return true;
+    if (depth >= max_depth) {
+      certified_ = false;
+      return true;
+    }
+    const double t = 0.5 * (lo.t + hi.t);
+    const Config q_mid = At(t);
+    Bounded mid = CertClearance(t, q_mid);
+    if (mid.exact && mid.clearance <= 0) {
+      invalid_at_ = t;
+      return false;
+    }
+    if (!Certify(lo, q_lo, mid, q_mid, depth + 1, max_depth)) return false;
+    return Certify(mid, q_mid, hi, q_hi, depth + 1, max_depth);
+  }
 
   Config At(double t) const { return space_.Interpolate(from_, to_, t); }
 
@@ -120,8 +184,11 @@ class EdgeCheck {
   CollisionContext& context_;
   const Config& from_;
   const Config& to_;
+  const ClearanceBound* bound_;
+  std::atomic<int64_t>* bound_total_;
   bool certified_ = true;
   double invalid_at_ = -1;
+  int64_t bound_queries_ = 0;
 };
 
 }  // namespace
@@ -129,6 +196,8 @@ class EdgeCheck {
 LocalPlanner::LocalPlanner(std::shared_ptr<const CollisionWorld> world, LocalPlannerOptions options)
     : world_(std::move(world)), options_(options), impl_(std::make_unique<Impl>()) {
   HGRAPH_CHECK(world_ != nullptr);
+  HGRAPH_CHECK(options_.clearance_bound == nullptr ||
+               &options_.clearance_bound->world() == world_.get());
   if (!std::isfinite(options_.resolution) || options_.resolution <= 0) {
     throw InputError("resolution",
                      "must be positive and finite, got " + std::to_string(options_.resolution));
@@ -141,6 +210,13 @@ LocalPlanner::LocalPlanner(std::shared_ptr<const CollisionWorld> world, LocalPla
 }
 
 LocalPlanner::~LocalPlanner() = default;
+
+std::shared_ptr<const ClearanceBound> BuildClearanceBound(
+    const std::shared_ptr<const CollisionWorld>& world, int threads) {
+  return ClearanceBound::Build(world, ClearanceBoundOptions{.threads = threads});
+}
+
+size_t ClearanceBoundBytes(const ClearanceBound& bound) { return bound.memory_bytes(); }
 
 const Space& LocalPlanner::space() const { return world_->space(); }
 
@@ -212,26 +288,31 @@ EdgeReport LocalPlanner::CheckEdge(const EdgeCheckRequest& request) const {
     const double bound = check.MotionBound(from, to);
     const double finest = 1.0 / (static_cast<double>(segments) * (1 << kMaxRefineDepth));
     constexpr double kMargin = 0.999;
-    EdgeCheck advance(s, impl_->body_component, impl_->body_radius, context, from, to);
-    std::vector<ClearanceSample> midpoints;  // Refine's queries; no profile is kept
-    ClearanceSample a{.t = 0, .clearance = context.Clearance(from)};
-    if (a.clearance <= 0) return invalid(0.0);
+    EdgeCheck advance(s, impl_->body_component, impl_->body_radius, context, from, to,
+                      options_.clearance_bound.get(), &impl_->bound_queries);
+    using Bounded = EdgeCheck::Bounded;
+    Bounded a = advance.CertClearance(0, from);
+    if (a.exact && a.clearance <= 0) return invalid(0.0);
     Config q_a = from;
     bool advanced = true;
     while (a.t < 1) {
-      const double reach = bound > 0 ? kMargin * a.clearance / bound : 1.0;
+      double reach = bound > 0 ? kMargin * a.clearance / bound : 1.0;
+      // A bound too small to step on is measured exactly before advancement gives up.
+      if (reach < finest && !a.exact) {
+        if (!advance.MakeExact(a, q_a)) return invalid(a.t);
+        reach = bound > 0 ? kMargin * a.clearance / bound : 1.0;
+      }
       if (reach < finest) {
         advanced = false;
         break;
       }
-      ClearanceSample b{.t = std::min(1.0, a.t + 2 * reach)};
-      Config q_b = b.t == 1.0 ? to : check.At(b.t);
-      b.clearance = context.Clearance(q_b);
-      if (b.clearance <= 0) return invalid(b.t);
+      const double t_b = std::min(1.0, a.t + 2 * reach);
+      Config q_b = t_b == 1.0 ? to : check.At(t_b);
+      Bounded b = advance.CertClearance(t_b, q_b);
+      if (b.exact && b.clearance <= 0) return invalid(b.t);
       // Halvings of [a.t, b.t] that stay at least `finest` long.
       const int depth = std::max(0, static_cast<int>(std::floor(std::log2((b.t - a.t) / finest))));
-      midpoints.clear();
-      if (!advance.Refine(a, q_a, b, q_b, 0, midpoints, depth)) {
+      if (!advance.Certify(a, q_a, b, q_b, 0, depth)) {
         return invalid(advance.invalid_at());
       }
       if (!advance.certified()) {
@@ -382,5 +463,6 @@ std::vector<ClearanceSample> LocalPlanner::ProbeClearance(
 
 int64_t LocalPlanner::total_collision_checks() const { return impl_->collision_checks.load(); }
 int64_t LocalPlanner::total_distance_queries() const { return impl_->distance_queries.load(); }
+int64_t LocalPlanner::total_bound_queries() const { return impl_->bound_queries.load(); }
 
 }  // namespace hgraph

@@ -13,6 +13,15 @@
 // distance query, down to kMaxRefineDepth halvings of a resolution step; a midpoint in collision
 // makes the edge invalid (this catches obstacles thinner than the resolution). The refined
 // samples join the profile; EdgeReport::certified says whether every stretch passed.
+//
+// With a clearance bound (LocalPlannerOptions::clearance_bound, core/distance), the certificate
+// of the modes that keep no profile (kCertified, kCertifiedQuick, kCertifiedOfValid) takes the
+// bound's cheap lower bound at each sample first, and FCL's exact distance only where the bound
+// cannot decide: a stretch whose bounds do not add up to the motion bound has its ends measured
+// exactly before it is halved, conservative advancement measures exactly before it gives up, and
+// only an exact clearance ever finds a collision. A certificate that holds with lower bounds holds
+// with the exact clearances. Profiles (kClearance, kClearanceOfValid), probes and Clearance()
+// stay exact everywhere: measures compute their values from them.
 #pragma once
 
 #include <atomic>
@@ -23,11 +32,26 @@
 
 namespace hgraph {
 
+// core/distance's lower bound on clearance; only core/motion sees its definition.
+class ClearanceBound;
+
 struct LocalPlannerOptions {
   // Longest step between two checked samples, as a fraction of the space's MaxExtent()
   // (OMPL's "longest valid segment fraction"). Must be > 0.
   double resolution = kDefaultResolution;
+  // Asked before the exact distance where a certificate needs only a lower bound (see above);
+  // null: exact distances only. From BuildClearanceBound of the same world.
+  std::shared_ptr<const ClearanceBound> clearance_bound;
 };
+
+// The clearance bound of a world (a distance field sampled on `threads` threads, 0: all cores,
+// and the robot as spheres), or null where none would pay: scenes without meshes or obstacles,
+// and worlds too large for a fine enough grid (core/distance/clearance_bound.h). Built once per
+// scene and shared by every planner of that world; immutable and thread safe.
+std::shared_ptr<const ClearanceBound> BuildClearanceBound(
+    const std::shared_ptr<const CollisionWorld>& world, int threads = 0);
+// Memory the bound holds, in bytes (for cache budgets).
+size_t ClearanceBoundBytes(const ClearanceBound& bound);
 
 // Thread safe: one CollisionContext per thread, made on first use. Not copyable.
 class LocalPlanner final : public MotionChecker {
@@ -52,6 +76,9 @@ class LocalPlanner final : public MotionChecker {
   int ProfileStretches(double length) const override { return SampleCount(length) - 1; }
   int64_t total_collision_checks() const override;
   int64_t total_distance_queries() const override;
+  // Lower bounds asked of the clearance bound (each far cheaper than a distance query).
+  int64_t total_bound_queries() const;
+  bool has_clearance_bound() const { return options_.clearance_bound != nullptr; }
 
   // Number of samples (including both ends) a motion of this length is checked at.
   int SampleCount(double length) const;

@@ -78,7 +78,9 @@ struct Problem {
   std::string file;
   std::shared_ptr<const Scene> scene;
   std::shared_ptr<const CollisionWorld> world;
+  // Exact clearances (the defaults), and with the scene's clearance bound where it gets one.
   std::unique_ptr<LocalPlanner> planner;
+  std::unique_ptr<LocalPlanner> bound_planner;
   double resolution = 0.01;
   std::vector<InputPath> inputs;
   std::vector<double> input_lengths;
@@ -96,8 +98,9 @@ struct Output {
 
 struct Method {
   std::string name;
-  std::string label;  // for tables and the chart
-  bool ompl = false;  // counts towards "best certified OMPL"
+  std::string label;             // for tables and the chart
+  bool ompl = false;             // counts towards "best certified OMPL"
+  bool clearance_bound = false;  // runs on Problem::bound_planner
   std::function<Output(const MotionChecker&, const Problem&)> run;
 };
 
@@ -185,9 +188,10 @@ Summary Summarize(const Method& m, const std::vector<Run>& runs) {
 
 Run RunOnce(const Method& m, const Problem& p, double k) {
   Run r;
-  CountingChecker counter(*p.planner);
-  const int64_t cc0 = p.planner->total_collision_checks();
-  const int64_t dq0 = p.planner->total_distance_queries();
+  const LocalPlanner& planner = m.clearance_bound ? *p.bound_planner : *p.planner;
+  CountingChecker counter(planner);
+  const int64_t cc0 = planner.total_collision_checks();
+  const int64_t dq0 = planner.total_distance_queries();
   Output out;
   const auto t0 = std::chrono::steady_clock::now();
   try {
@@ -197,14 +201,15 @@ Run RunOnce(const Method& m, const Problem& p, double k) {
     return r;
   }
   r.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-  r.collision_checks = p.planner->total_collision_checks() - cc0;
-  r.distance_queries = p.planner->total_distance_queries() - dq0;
+  r.collision_checks = planner.total_collision_checks() - cc0;
+  r.distance_queries = planner.total_distance_queries() - dq0;
   // The merge counts its own local-planner runs (MergeStats::edges_checked); the others are
   // counted at the checker.
   r.edges_checked = out.engine_edges_checked >= 0 ? out.engine_edges_checked : counter.edges();
   r.search_rounds = out.search_rounds;
   r.objective = out.objective;
   r.hgraph_objective = out.hgraph_objective;
+  // Judged with exact clearances, whatever checker the method ran on.
   const PathCheckResult check =
       CheckPaths(*p.planner, PathCheckRequest{.paths = {out.path}, .k = k});
   const InputReport& rep = check.paths.at(0);
@@ -250,6 +255,12 @@ Method HgraphMethod(const std::string& name, const std::string& label, MeasureSp
 std::vector<Method> Methods(const Problem& p, bool inverse_clearance_pair, uint64_t seed) {
   std::vector<Method> m;
   m.push_back(HgraphMethod("hgraph-defaults", "hgraph defaults", {}, {}));
+  // The defaults on a checker with the scene's clearance bound (`hgraph-server
+  // --clearance-bound`): what the bound gains and costs.
+  Method bounded =
+      HgraphMethod("hgraph-clearance-bound", "hgraph defaults + --clearance-bound", {}, {});
+  bounded.clearance_bound = true;
+  m.push_back(std::move(bounded));
   m.push_back(HgraphMethod("hgraph-eager-all-pairs", "hgraph eager all-pairs", {},
                            MergeOptions{.candidates = {.variant = Variant::kAllPairs},
                                         .evaluation = Evaluation::kEager}));
@@ -310,8 +321,20 @@ Problem LoadProblem(const std::string& name, const std::string& file, const fs::
   p.resolution = SceneResolution(proto);
   p.scene = SceneFromProto(proto, fs::path(file).parent_path().string(), {});
   p.world = std::make_shared<const CollisionWorld>(p.scene);
+  const auto b0 = std::chrono::steady_clock::now();
+  const auto bound = BuildClearanceBound(p.world);
+  std::cerr << name << ": clearance bound "
+            << (bound ? std::to_string(ClearanceBoundBytes(*bound)) + " bytes, built in " +
+                            std::to_string(std::chrono::duration<double, std::milli>(
+                                               std::chrono::steady_clock::now() - b0)
+                                               .count()) +
+                            " ms"
+                      : std::string("none"))
+            << "\n";
   p.planner =
       std::make_unique<LocalPlanner>(p.world, LocalPlannerOptions{.resolution = p.resolution});
+  p.bound_planner = std::make_unique<LocalPlanner>(
+      p.world, LocalPlannerOptions{.resolution = p.resolution, .clearance_bound = bound});
   const fs::path inputs_file = out_dir / "inputs" / (name + ".json");
   if (fs::exists(inputs_file)) {
     p.inputs = LoadPathsFile(inputs_file.string(), p.scene->space);
@@ -548,6 +571,8 @@ int Main(int argc, char** argv) {
   app.add_option("--plan-time", plan_time_s, "PRM budget per input path, seconds");
   app.add_option("--seed", seed, "PRM and simplifier seed");
   app.add_option("--out", out, "output folder (inputs are cached in <out>/inputs)");
+  std::vector<std::string> only_methods;
+  app.add_option("--methods", only_methods, "run only these methods (names as in results.json)");
   app.add_option("--inverse-clearance-scenes", ic_scenes,
                  "scenes that also run inverse clearance k=3, all-pairs, node spacing 1, lazy "
                  "and eager");
@@ -558,6 +583,8 @@ int Main(int argc, char** argv) {
   for (const auto& s : scene_names) command += " " + s;
   command += " --inverse-clearance-scenes";
   for (const auto& s : ic_scenes) command += " " + s;
+  if (!only_methods.empty()) command += " --methods";
+  for (const auto& s : only_methods) command += " " + s;
 
   const fs::path source(HGRAPH_SOURCE_DIR);
   const fs::path out_dir(out);
@@ -579,7 +606,12 @@ int Main(int argc, char** argv) {
                                        : fs::path(name).stem().string();
     Problem p = LoadProblem(short_name, file.string(), out_dir, count, plan_time_s, seed);
     const bool ic = std::find(ic_scenes.begin(), ic_scenes.end(), short_name) != ic_scenes.end();
-    const std::vector<Method> methods = Methods(p, ic, seed);
+    std::vector<Method> methods = Methods(p, ic, seed);
+    if (!only_methods.empty()) {
+      std::erase_if(methods, [&](const Method& m) {
+        return std::find(only_methods.begin(), only_methods.end(), m.name) == only_methods.end();
+      });
+    }
     std::vector<std::vector<Run>> runs_by_method(methods.size());
     for (int r = 0; r < runs; ++r) {
       // Interleaved, and the order rotates each run so no method always runs first.
