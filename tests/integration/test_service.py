@@ -623,9 +623,12 @@ def test_sigterm_drains_then_cancels_in_flight_merge_after_grace_and_exits_0():
         c.create_session(c.upload_scene(DATA / "scene.json"))
         request = service_pb2.MergePathsRequest(
             session=c.session, paths=hgraph_client.make_paths(densified(40)),
-            # Eager: every candidate checked, a merge long enough to be in flight at SIGTERM.
+            # A merge that is still in flight when the grace period ends: a post-optimization
+            # budget given is spent (restarts until it runs out), far past drain + grace. (The
+            # automatic budget stops by rounds, which a fast machine finishes within them.)
             options=merge_pb2.MergeOptions(variant=merge_pb2.VARIANT_ALL_PAIRS,
-                                           evaluation=merge_pb2.EVALUATION_EAGER))
+                                           evaluation=merge_pb2.EVALUATION_EAGER,
+                                           optimize_ms=40000))
         call = c.merge_stream(request, timeout=60)
         next(call)
         s.proc.send_signal(signal.SIGTERM)
