@@ -272,7 +272,8 @@ Subcommand AddMergeCommand(CLI::App& parent) {
       "merge",
       "Merge input paths into one path of higher quality (in process, or with --server "
       "through hgraph-server).");
-  app->add_option("--scene", f.scene, "Scene JSON (hgraph.v1.Scene)")->required();
+  app->add_option("--scene", f.scene, "Scene JSON (hgraph.v1.Scene) or OMPL.app problem (.cfg)")
+      ->required();
   app->add_option("--paths", f.paths,
                   "Input paths: PathSet JSON, or OMPL text (one configuration per line, blank "
                   "lines between paths)")

@@ -119,6 +119,10 @@ double MeanInputEdgeLength(const HGraph& graph, const Space& space) {
   return count > 0 ? total / count : 0.0;
 }
 
+double NewNodeReach(const HGraph& graph, const Space& space, double radius) {
+  return radius > 0 ? radius : 2 * MeanInputEdgeLength(graph, space);
+}
+
 CandidateSet BridgeCandidates(const HGraph& graph, const Space& space,
                               const CandidateOptions& options) {
   ValidateCandidateOptions(options);

@@ -54,4 +54,9 @@ CandidateSet BridgeCandidates(const HGraph& graph, const Space& space,
 // parameters).
 double MeanInputEdgeLength(const HGraph& graph, const Space& space);
 
+// How far bridges reach from a node added after the build (AddPaths' nodes, the
+// post-optimization's shortcut points): the H-Graph's `radius` (CandidateSet::radius), or twice
+// its mean input edge length where that is 0.
+double NewNodeReach(const HGraph& graph, const Space& space, double radius);
+
 }  // namespace hgraph

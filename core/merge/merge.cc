@@ -588,8 +588,7 @@ int64_t HybridizationSession::AddPaths(const std::vector<InputPath>& paths,
                        "paths");
   const double reach = options_.candidates.variant == Variant::kAllPairs
                            ? std::numeric_limits<double>::infinity()
-                       : build_stats_.radius > 0 ? build_stats_.radius
-                                                 : 2 * MeanInputEdgeLength(graph_, space);
+                           : NewNodeReach(graph_, space, build_stats_.radius);
   const int first_edge = graph_.num_edges();
   std::vector<int> input_edges;
   std::vector<int> bridges;
