@@ -31,6 +31,9 @@ struct InputPath {
 
 // Sum of Space::Distance over consecutive waypoints (0 for fewer than two).
 double PathLength(const Space& space, const InputPath& path);
+// `count` configurations evenly spaced by arc length along the path, ends included (its ends
+// only when count < 2).
+std::vector<Config> SamplesAlong(const Space& space, const InputPath& path, int count);
 
 // Space::Validate on every waypoint, naming "<field>.waypoints[i]" in the InputError. With
 // min_waypoints > 0, a path with fewer waypoints is an InputError naming `field`.

@@ -1,6 +1,7 @@
 #include "core/scene/scene.h"
 
 #include <cmath>
+#include <set>
 #include <string>
 
 #include "core/common/error.h"
@@ -83,6 +84,12 @@ void ValidateScene(const Scene& scene) {
   for (size_t i = 0; i < scene.obstacles.size(); ++i) {
     ValidateShape(scene.obstacles[i].shape, "obstacles[" + std::to_string(i) + "].shape");
   }
+}
+
+std::vector<int> RobotComponents(const Scene& scene) {
+  std::set<int> components;
+  for (const RobotBody& body : scene.robot) components.insert(body.component);
+  return {components.begin(), components.end()};
 }
 
 }  // namespace hgraph

@@ -71,5 +71,7 @@ struct Scene {
 // Throws InputError naming the field if the robot is empty, a body's component index is out of
 // range or cannot drive a body, or a primitive has a non-positive size.
 void ValidateScene(const Scene& scene);
+// The distinct space components that drive the robot's bodies, in increasing order.
+std::vector<int> RobotComponents(const Scene& scene);
 
 }  // namespace hgraph
