@@ -14,6 +14,7 @@
 #include "core/hgraph/bridge_candidates.h"
 #include "core/hgraph/hgraph.h"
 #include "core/measure/measure.h"
+#include "core/merge/edge_evaluator.h"
 #include "core/merge/evidence.h"
 #include "core/merge/path_check.h"
 #include "core/merge/shortcut.h"
@@ -144,7 +145,7 @@ class HybridizationSession {
   // Validates the request and builds the H-Graph (phases validate, inputs, align, check).
   // Throws InputError for bad input, Error(kCancelled / kDeadlineExceeded) when stopped, and
   // Error(kFailedPrecondition) if no input path is valid.
-  HybridizationSession(const MotionChecker& checker, const MergeRequest& request);
+  HybridizationSession(const ClearanceChecker& checker, const MergeRequest& request);
   HybridizationSession(HybridizationSession&&) = default;
   // A copy that can be queried while the original serves other callers (the server's
   // re-queries); shares the checker.
@@ -177,71 +178,43 @@ class HybridizationSession {
   // The anytime post-optimization (optimize.h) grows the query's overlay and searches it.
   friend class PostOptimizer;
   HybridizationSession(const HybridizationSession&) = default;
-  // What a check of an edge must establish: validity at the resolution's samples (kSampled), a
-  // certificate of the whole motion without a profile (kCertified, a few distance queries in
-  // open space), or the clearance profile with its certificate.
-  enum class EdgeNeed { kValidity, kCertificate, kClearance };
-  // Checks the edges in parallel for `need`.
-  void CheckEdges(const std::vector<int>& edge_ids, EdgeNeed need, const std::string& phase,
-                  const ProgressCallback& progress, const CancelToken& cancel, int64_t* checked);
-  // Brings the edges a lazy search wants one step closer to their exact value under a measure
-  // that needs clearance: a probe of the middle of the profile's grid, then of its quarters, its
-  // eighths, ..., then the whole profile. Each step tightens the edge's bound (or finds the
-  // motion in contact), so an edge that stops being wanted never pays for its profile.
-  // An edge with a positive target (a clearance that decides its value, from the search) is
-  // proven to keep it or shown not to (ProveClearance), and profiled only if neither holds.
-  // With `ceilings`, the probed edges' ceilings are brought up to date in the same parallel loop.
-  void RefineClearanceEdges(const std::vector<int>& edge_ids, const std::vector<double>& targets,
-                            bool ceilings, const ProgressCallback& progress,
-                            const CancelToken& cancel, int64_t* checked);
-  // Decides whether edge e keeps clearance >= target all along: samples its profile's grid where
-  // the known clearances (its ends', its probes') do not yet prove it, until they do
-  // (ClearanceFloor >= target), or one sample is below the target, or a contact makes the motion
-  // invalid. Returns false if only the profile can decide (no grid point left where a proof
-  // lacks). Thread safe for distinct edges.
-  bool ProveClearance(int e, double target);
-  // Once per unchecked edge, before its first probe: a collision check at each probe round's
-  // points (ScanFractions), which finds most candidates in contact for no distance query at all.
-  // Marks the edge invalid and returns true if one is in contact. Thread safe for distinct edges.
-  bool ScanForContact(int e);
-  // Edge e's motion bound (MotionChecker::MotionBound), computed once. Thread safe for distinct
-  // edges.
-  double MotionBoundOf(int e);
-  // Edge e is invalid: a point at t of it is in contact (found for this many distance queries).
-  void MarkInContact(int e, double t, int64_t distance_queries);
-  // Computes the clearances on the profile grids of the edges in parallel, in pieces of each
-  // edge, before their profiles (which reuse them, EdgeCheckRequest::known): the output's few
-  // long edges would otherwise keep one thread each busy.
-  // Runs other(0) ... other(other_count - 1) in the same parallel loop (work on other edges).
-  void ProbeProfileGrids(const std::vector<int>& edge_ids, const CancelToken& cancel,
-                         size_t other_count = 0,
-                         const std::function<void(size_t)>& other = nullptr);
-  // Adds probed clearances to edge e's, kept sorted by t.
-  void AddProbes(int e, const std::vector<ClearanceSample>& found,
-                 const std::vector<ClearanceWitness>* witnesses = nullptr);
-  // Computes the clearance of every node that lacks one (the lazy bounds use them). Returns how
-  // many it computed.
-  int64_t ComputeNodeClearances(const CancelToken& cancel);
-  // What the search knows of edge e before its check (with its ceilings, if asked).
-  EdgeBoundInput BoundInput(int e, bool ceilings);
-  // Edge e's ceilings (EdgeBoundInput::ceiling), computed when its ends' or probes' witnesses
-  // change. Thread safe for distinct edges.
-  const std::vector<ClearanceSample>& CeilingOf(int e);
+  // The evaluator of this H-Graph's edges (a view of graph_ and evidence_).
+  LazyEdgeEvaluator Evaluator();
   // Extends the per-node and per-edge data to nodes and edges added since.
   void SyncEdgeData();
   // The best path under `measure` with every edge checked, and then certified (`finish`
   // kCertificate) or also profiled (kClearance, so that every measure can be reported). The
   // certificate can find a collision a sampled check missed, or fail where a motion grazes an
   // obstacle; then the search runs again. Adds to the result's stats and timing.
-  SearchResult SearchBest(const Measure& measure, EdgeNeed finish, const ProgressCallback& progress,
-                          const CancelToken& cancel, MergeResult* result, int64_t* rechecked);
+  SearchResult SearchBest(const Measure& measure, EdgeProof finish,
+                          const ProgressCallback& progress, const CancelToken& cancel,
+                          MergeResult* result, int64_t* rechecked);
+  // Before a lazy search under `measure`: the node clearances and ceilings its bounds use.
+  void PrepareBounds(const Measure& measure, const CancelToken& cancel, MergeResult* result);
+  // Checks the edges of a path found that lack what `finish` asks (a certificate, or a profile);
+  // returns them (the path stands if they are still valid).
+  std::vector<int> FinishPath(const SearchResult& best, EdgeProof finish,
+                              const ProgressCallback& progress, const CancelToken& cancel,
+                              int64_t* rechecked);
+  // Before a query: profiles of the valid edges that lack one where they are wanted (eager
+  // evaluation under a measure of clearance: all of them; lazy: the last length query's path).
+  void ProfileWhatIsKnown(bool needs_clearance, const ProgressCallback& progress,
+                          const CancelToken& cancel, int64_t* rechecked);
+  // Every input's report under `measure`, from the reports stored on its edges, and the best
+  // checked valid input.
+  void ReportInputs(const Measure& measure, MergeResult* result) const;
+  // The query's work (checks since the counts `*_before`, with what an eager AddPaths left
+  // unreported) and the stats derived from the stored H-Graph's edges (known_before[e]: what
+  // was known of edge e before the query, KnownOf).
+  void CountWork(bool first, const std::vector<uint8_t>& known_before, int64_t checks_before,
+                 int64_t queries_before, int64_t rechecked, MergeResult* result);
   // The nodes of a path found, as the output lists them: a node at the same configuration as
   // the one before it (an input that repeats a waypoint) once.
   std::vector<int> OutputNodes(const SearchResult& found) const;
   // Where each node of `ids` lies on an input (ShortcutRequest::sources).
   std::vector<WaypointSource> SourcesOf(const std::vector<int>& ids) const;
 
-  const MotionChecker* checker_;
+  const ClearanceChecker* checker_;
   MergeOptions options_;
   HGraph graph_;
   MergeStats build_stats_;
@@ -256,6 +229,6 @@ class HybridizationSession {
 };
 
 // Build + one query.
-MergeResult Merge(const MotionChecker& checker, const MergeRequest& request);
+MergeResult Merge(const ClearanceChecker& checker, const MergeRequest& request);
 
 }  // namespace hgraph

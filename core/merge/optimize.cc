@@ -119,10 +119,9 @@ bool PostOptimizer::Take(SearchResult next) {
 SearchResult PostOptimizer::Search() {
   // Under safe length the search may take an edge whose clearance floor proves the safety
   // without a profile; the profile makes the objective known.
-  using Need = HybridizationSession::EdgeNeed;
-  return session_.SearchBest(measure_,
-                             measure_.needs_clearance() ? Need::kClearance : Need::kCertificate,
-                             progress_, cancel_, result_, rechecked_);
+  return session_.SearchBest(
+      measure_, measure_.needs_clearance() ? EdgeProof::kProfile : EdgeProof::kCertificate,
+      progress_, cancel_, result_, rechecked_);
 }
 
 void PostOptimizer::Keep(int a, int b, const EdgeReport& report) {

@@ -131,10 +131,10 @@ PathCheckResult CheckPaths(const MotionChecker& checker, const PathCheckRequest&
   ParallelFor(threads, jobs.size(), [&](size_t i) {
     if (request.cancel.stopped()) return;
     const InputPath& path = paths[jobs[i].path];
-    reports[i] = checker.CheckEdge(EdgeCheckRequest{
-        .from = &path.waypoints[jobs[i].from],
-        .to = &path.waypoints[jobs[i].to],
-        .mode = need_clearance ? EdgeCheckMode::kClearance : EdgeCheckMode::kSampled});
+    reports[i] = checker.CheckEdge(
+        EdgeCheckRequest{.from = &path.waypoints[jobs[i].from],
+                         .to = &path.waypoints[jobs[i].to],
+                         .proof = need_clearance ? EdgeProof::kProfile : EdgeProof::kSamples});
     const int64_t c = checks += reports[i].collision_checks;
     const int64_t q = queries += reports[i].distance_queries;
     reporter.Done(++done, c, q);

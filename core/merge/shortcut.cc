@@ -23,9 +23,9 @@ EdgeReport Check(const MotionChecker& checker, const Config& a, const Config& b,
                  bool lazy) {
   return checker.CheckEdge(EdgeCheckRequest{.from = &a,
                                             .to = &b,
-                                            .mode = safety > 0 ? EdgeCheckMode::kClearance
-                                                    : lazy     ? EdgeCheckMode::kSampled
-                                                               : EdgeCheckMode::kCertifiedQuick});
+                                            .proof = safety > 0 ? EdgeProof::kProfile
+                                                     : lazy     ? EdgeProof::kSamples
+                                                                : EdgeProof::kCertificateOrGiveUp});
 }
 
 // Whether a path may take the motion: proven free (and keeping `safety`), or with `lazy` valid at

@@ -49,7 +49,7 @@ struct ShortcutRequest {
   // between. A path that turns while it moves loses the turns' detours where no straight motion
   // is free. Only in spaces with two parts or more.
   double partial = 0;
-  // Motions taken when valid at the resolution's samples (EdgeCheckMode::kSampled), without a
+  // Motions taken when valid at the resolution's samples (EdgeProof::kSamples), without a
   // certificate: for a path that a certified search over the H-Graph takes apart afterwards
   // (lazy), where most motions a shortcut takes are replaced by later ones. Not with safety.
   bool lazy = false;

@@ -174,6 +174,98 @@ class EdgeCheck {
     return Refine(sample, q_mid, hi, q_hi, depth + 1, out, max_depth);
   }
 
+  // The samples at the resolution, ends first (the end state is the one most likely to be new
+  // to the caller), then the interior in bisection order: the t of the first in collision, or
+  // -1 if every one is valid.
+  double FirstInvalidSample(int segments, const EdgeKnown& known) {
+    if (!known.to_valid && !context_.Valid(to_)) return 1.0;
+    if (!known.from_valid && !context_.Valid(from_)) return 0.0;
+    for (int k : BisectionOrder(segments)) {
+      const double t = static_cast<double>(k) / segments;
+      if (!context_.Valid(At(t))) return t;
+    }
+    return -1;
+  }
+
+  // What conservative advancement established: a certificate, or a point in contact
+  // (invalid_at >= 0), or neither (it stalled where steps would shrink below the profile's
+  // finest refinement).
+  struct Advanced {
+    bool certified = false;
+    double invalid_at = -1;
+  };
+  // Conservative advancement (EdgeProof::kCertificate), two-sided: the motion bound is linear in
+  // t along a straight motion, so a clearance c at t frees the robot for c / bound of the way on
+  // either side of t. The next sample goes where, were its clearance c too, the two would just
+  // cover the stretch between them; a stretch they do not cover is halved (Certify) down to the
+  // profile's finest refinement. Where clearance changes slowly this takes half the queries of
+  // advancing by c / bound from each sample.
+  Advanced Advance(int segments) {
+    const double bound = MotionBound(from_, to_);
+    const double finest =
+        1.0 / (static_cast<double>(segments) * (1 << LocalPlanner::kMaxRefineDepth));
+    constexpr double kMargin = 0.999;
+    Bounded a = CertClearance(0, from_);
+    if (a.exact && a.clearance <= 0) return Advanced{.invalid_at = 0.0};
+    Config q_a = from_;
+    while (a.t < 1) {
+      double reach = bound > 0 ? kMargin * a.clearance / bound : 1.0;
+      // A bound too small to step on is measured exactly before advancement gives up.
+      if (reach < finest && !a.exact) {
+        if (!MakeExact(a, q_a)) return Advanced{.invalid_at = a.t};
+        reach = bound > 0 ? kMargin * a.clearance / bound : 1.0;
+      }
+      if (reach < finest) return Advanced{};
+      const double t_b = std::min(1.0, a.t + 2 * reach);
+      Config q_b = t_b == 1.0 ? to_ : At(t_b);
+      Bounded b = CertClearance(t_b, q_b);
+      if (b.exact && b.clearance <= 0) return Advanced{.invalid_at = b.t};
+      // Halvings of [a.t, b.t] that stay at least `finest` long.
+      const int depth = std::max(0, static_cast<int>(std::floor(std::log2((b.t - a.t) / finest))));
+      if (!Certify(a, q_a, b, q_b, 0, depth)) return Advanced{.invalid_at = invalid_at_};
+      if (!certified_) return Advanced{};
+      a = b;
+      q_a = std::move(q_b);
+    }
+    return Advanced{.certified = true};
+  }
+
+  // The clearance profile: a distance query at each point of the resolution's grid (or its
+  // clearance from `known`, sorted by t, may be null), then every stretch between two refined
+  // (Refine) into `profile`. False (invalid_at set) if a point is in contact.
+  bool Profile(int segments, const std::vector<ClearanceSample>* known,
+               std::vector<ClearanceSample>* profile) {
+    std::vector<Config> grid;
+    std::vector<ClearanceSample> samples;
+    grid.reserve(segments + 1);
+    samples.reserve(segments + 1);
+    size_t next_known = 0;
+    for (int k = 0; k <= segments; ++k) {
+      const double t = static_cast<double>(k) / segments;
+      grid.push_back(k == 0 ? from_ : k == segments ? to_ : At(t));
+      while (known != nullptr && next_known < known->size() && (*known)[next_known].t < t) {
+        ++next_known;
+      }
+      const double clearance =
+          known != nullptr && next_known < known->size() && (*known)[next_known].t == t
+              ? (*known)[next_known].clearance
+              : context_.Clearance(grid.back());
+      // Touching contact: valid for FCL's collision test, but not free.
+      if (clearance <= 0) {
+        invalid_at_ = t;
+        return false;
+      }
+      samples.push_back({.t = t, .clearance = clearance});
+    }
+    profile->reserve(samples.size());
+    for (int k = 0; k < segments; ++k) {
+      profile->push_back(samples[k]);
+      if (!Refine(samples[k], grid[k], samples[k + 1], grid[k + 1], 0, *profile)) return false;
+    }
+    profile->push_back(samples.back());
+    return true;
+  }
+
   bool certified() const { return certified_; }
   double invalid_at() const { return invalid_at_; }
 
@@ -263,104 +355,30 @@ EdgeReport LocalPlanner::CheckEdge(const EdgeCheckRequest& request) const {
     return finish();
   };
 
+  // Three stages, each skipped where the request knows or does not ask for its answer: the
+  // samples at the resolution, conservative advancement for a certificate, the profile.
   const int segments = SampleCount(report.length) - 1;
   EdgeCheck check(s, impl_->body_component, impl_->body_radius, context, from, to);
-  // Ends first: the end state is the one most likely to be new to the caller.
-  if (request.mode != EdgeCheckMode::kClearanceOfValid &&
-      request.mode != EdgeCheckMode::kCertifiedOfValid) {
-    if (!request.to_valid && !context.Valid(to)) return invalid(1.0);
-    if (!request.from_valid && !context.Valid(from)) return invalid(0.0);
-    for (int k : BisectionOrder(segments)) {
-      const double t = static_cast<double>(k) / segments;
-      if (!context.Valid(check.At(t))) return invalid(t);
-    }
+  if (!request.known.samples_valid) {
+    const double t = check.FirstInvalidSample(segments, request.known);
+    if (t >= 0) return invalid(t);
   }
   report.state = EdgeState::kValid;
-  if (request.mode == EdgeCheckMode::kSampled) return finish();
-  if (request.mode == EdgeCheckMode::kCertified || request.mode == EdgeCheckMode::kCertifiedQuick ||
-      request.mode == EdgeCheckMode::kCertifiedOfValid) {
-    // Conservative advancement (see EdgeCheckMode::kCertified), two-sided: the motion bound is
-    // linear in t along a straight motion, so a clearance c at t frees the robot for c / bound
-    // of the way on either side of t. The next sample goes where, were its clearance c too, the
-    // two would just cover the stretch between them; a stretch they do not cover is halved
-    // (EdgeCheck::Refine) down to the profile's finest refinement. Where clearance changes
-    // slowly this takes half the queries of advancing by c / bound from each sample.
-    const double bound = check.MotionBound(from, to);
-    const double finest = 1.0 / (static_cast<double>(segments) * (1 << kMaxRefineDepth));
-    constexpr double kMargin = 0.999;
+  if (request.proof == EdgeProof::kSamples) return finish();
+  if (request.proof != EdgeProof::kProfile) {
     EdgeCheck advance(s, impl_->body_component, impl_->body_radius, context, from, to,
                       options_.clearance_bound.get(), &impl_->bound_queries);
-    using Bounded = EdgeCheck::Bounded;
-    Bounded a = advance.CertClearance(0, from);
-    if (a.exact && a.clearance <= 0) return invalid(0.0);
-    Config q_a = from;
-    bool advanced = true;
-    while (a.t < 1) {
-      double reach = bound > 0 ? kMargin * a.clearance / bound : 1.0;
-      // A bound too small to step on is measured exactly before advancement gives up.
-      if (reach < finest && !a.exact) {
-        if (!advance.MakeExact(a, q_a)) return invalid(a.t);
-        reach = bound > 0 ? kMargin * a.clearance / bound : 1.0;
-      }
-      if (reach < finest) {
-        advanced = false;
-        break;
-      }
-      const double t_b = std::min(1.0, a.t + 2 * reach);
-      Config q_b = t_b == 1.0 ? to : check.At(t_b);
-      Bounded b = advance.CertClearance(t_b, q_b);
-      if (b.exact && b.clearance <= 0) return invalid(b.t);
-      // Halvings of [a.t, b.t] that stay at least `finest` long.
-      const int depth = std::max(0, static_cast<int>(std::floor(std::log2((b.t - a.t) / finest))));
-      if (!advance.Certify(a, q_a, b, q_b, 0, depth)) {
-        return invalid(advance.invalid_at());
-      }
-      if (!advance.certified()) {
-        advanced = false;
-        break;
-      }
-      a = b;
-      q_a = std::move(q_b);
-    }
-    if (advanced) {
+    const EdgeCheck::Advanced advanced = advance.Advance(segments);
+    if (advanced.invalid_at >= 0) return invalid(advanced.invalid_at);
+    if (advanced.certified) {
       report.certified = true;
       return finish();
     }
-    if (request.mode == EdgeCheckMode::kCertifiedQuick) return finish();
+    if (request.proof == EdgeProof::kCertificateOrGiveUp) return finish();
   }
-
-  std::vector<Config> grid;
-  std::vector<ClearanceSample> samples;
-  grid.reserve(segments + 1);
-  samples.reserve(segments + 1);
-  size_t next_known = 0;
-  // The clearance at grid point t, known or queried.
-  const auto clearance_at = [&](double t, const Config& q) {
-    if (request.known != nullptr) {
-      const std::vector<ClearanceSample>& known = *request.known;
-      while (next_known < known.size() && known[next_known].t < t) ++next_known;
-      if (next_known < known.size() && known[next_known].t == t) {
-        return known[next_known].clearance;
-      }
-    }
-    return context.Clearance(q);
-  };
-  for (int k = 0; k <= segments; ++k) {
-    const double t = static_cast<double>(k) / segments;
-    grid.push_back(k == 0 ? from : k == segments ? to : check.At(t));
-    const double clearance = clearance_at(t, grid.back());
-    // Touching contact: valid for FCL's collision test, but not free.
-    if (clearance <= 0) return invalid(t);
-    samples.push_back({.t = t, .clearance = clearance});
+  if (!check.Profile(segments, request.known.clearances, &report.profile)) {
+    return invalid(check.invalid_at());
   }
-  report.profile.reserve(samples.size());
-  for (int k = 0; k < segments; ++k) {
-    report.profile.push_back(samples[k]);
-    if (!check.Refine(samples[k], grid[k], samples[k + 1], grid[k + 1], 0, report.profile)) {
-      return invalid(check.invalid_at());
-    }
-  }
-  report.profile.push_back(samples.back());
   report.has_clearance = true;
   report.certified = check.certified();
   return finish();

@@ -54,7 +54,7 @@ std::shared_ptr<const ClearanceBound> BuildClearanceBound(
 size_t ClearanceBoundBytes(const ClearanceBound& bound);
 
 // Thread safe: one CollisionContext per thread, made on first use. Not copyable.
-class LocalPlanner final : public MotionChecker {
+class LocalPlanner final : public ClearanceChecker {
  public:
   // Throws InputError("resolution") if options.resolution <= 0 or is not finite.
   LocalPlanner(std::shared_ptr<const CollisionWorld> world, LocalPlannerOptions options = {});

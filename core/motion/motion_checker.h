@@ -48,54 +48,51 @@ struct EdgeReport {
 // resolution (the local planner's, a scene's unset one, OMPL's in core/plan) is this one.
 inline constexpr double kDefaultResolution = 0.01;
 
-// What a check of one motion establishes.
-enum class EdgeCheckMode {
+// What a check of one motion must establish (EdgeCheckRequest::proof).
+enum class EdgeProof {
   // Validity at the resolution's samples only (OMPL's discrete motion validator).
-  kSampled,
+  kSamples,
   // Validity, with the motion also proven free between its samples but no profile recorded,
   // for a caller that wants the merge's guarantee without clearances (a planner's motion
   // validator). Conservative advancement: from a point with clearance c the robot moves freely
   // while no point of it moves c, so one distance query clears a long stretch in open space.
-  // Where the steps would shrink below the profile's finest refinement, the kClearance check
-  // runs instead, so the answer is the one kClearance would give. Sets report.certified.
-  kCertified,
-  // As kCertified, except where conservative advancement stalls: the answer is then "valid, not
-  // certified" at once (the samples at the resolution passed), without the kClearance check
-  // kCertified runs there. For a caller that takes only proven motions and has other candidates
-  // to try (the post-optimization's shortcuts): a motion that grazes an obstacle costs a few
-  // distance queries instead of a profile. It certifies a motion, or finds it in collision, only
-  // where kCertified's samples and advancement do.
-  kCertifiedQuick,
-  // As kCertified for a motion that already passed the validity check at this checker's
-  // resolution (the lazy search's edges on the path it found, the shortcuts' motions): skips
-  // the samples, whose answer is known, and certifies (or finds a collision) as kCertified does.
-  kCertifiedOfValid,
+  // Where the steps would shrink below the profile's finest refinement, the profile's check
+  // (kProfile) runs instead, so the answer is the one kProfile would give. Sets
+  // report.certified.
+  kCertificate,
+  // As kCertificate, except where conservative advancement stalls: the answer is then "valid,
+  // not certified" at once (the samples at the resolution passed), without the profile
+  // kCertificate falls back to. For a caller that takes only proven motions and has other
+  // candidates to try (the post-optimization's shortcuts): a motion that grazes an obstacle
+  // costs a few distance queries instead of a profile. It certifies a motion, or finds it in
+  // collision, only where kCertificate's samples and advancement do.
+  kCertificateOrGiveUp,
   // Validity and the clearance profile with its certificate (core/motion/local_planner.h).
-  kClearance,
-  // As kClearance for a motion that already passed the validity check at this checker's
-  // resolution (a stored edge re-checked for its profile): skips straight to the clearance
-  // samples, which find any collision on their own.
-  kClearanceOfValid,
+  kProfile,
+};
+
+// What the caller already knows of the motion, from earlier checks at this checker. A check
+// skips what is known; it never trusts a guess (every field is a fact some check found).
+struct EdgeKnown {
+  // This end passed a collision check: its check, the first of the samples, is skipped.
+  bool from_valid = false;
+  bool to_valid = false;
+  // The whole motion passed the sampled check at this checker's resolution (kSamples): the
+  // samples are skipped, and the proof starts from them (a lazy search's edge on the path it
+  // found, a stored edge re-checked for its profile). A profile's clearances find any
+  // collision on their own; a certificate finds one where a distance query is in contact.
+  bool samples_valid = false;
+  // Clearances at points of the profile's grid (ProbeClearance's samples, the clearance of an
+  // end at t = 0 or 1), sorted by t; a profile takes them instead of querying again. May be null.
+  const std::vector<ClearanceSample>* clearances = nullptr;
 };
 
 struct EdgeCheckRequest {
   const Config* from = nullptr;
   const Config* to = nullptr;
-  EdgeCheckMode mode = EdgeCheckMode::kSampled;
-  // Clearances already known at points of the profile's grid (ProbeClearance's samples, the
-  // clearance of an end at t = 0 or 1), sorted by t; a profile takes them instead of querying
-  // again. May be null.
-  const std::vector<ClearanceSample>* known = nullptr;
-  // The caller knows this end valid (it passed a collision check at this checker): its
-  // collision check, the first of the samples, is skipped.
-  bool from_valid = false;
-  bool to_valid = false;
+  EdgeProof proof = EdgeProof::kSamples;
+  EdgeKnown known;
 };
-
-// True for the modes that record a clearance profile.
-inline bool RecordsClearance(EdgeCheckMode mode) {
-  return mode == EdgeCheckMode::kClearance || mode == EdgeCheckMode::kClearanceOfValid;
-}
 
 // How ProbeClearance takes its samples: a distance query at each point, or first a collision
 // check (about a tenth of a distance query on meshes), which answers "in contact" (clearance 0)
@@ -119,63 +116,48 @@ class MotionChecker {
   virtual EdgeReport CheckEdge(const EdgeCheckRequest& request) const = 0;
   virtual bool IsValid(const Config& q) const = 0;
   virtual double Clearance(const Config& q) const = 0;
+  // Totals over every query this checker ran so far (for progress and stats).
+  virtual int64_t total_collision_checks() const = 0;
+  virtual int64_t total_distance_queries() const = 0;
+};
+
+// A motion checker that also answers what the merge's lazy evaluation asks of clearance
+// (core/merge/edge_evaluator.h): witnesses, motion bounds, probes on the profile's grid. The
+// merge requires one; planning and CheckPaths take any MotionChecker. Every method is required,
+// so that a wrapper cannot forget one and silently answer "nothing known".
+class ClearanceChecker : public MotionChecker {
+ public:
   // The clearance at q and where it was found (a witness with body -1 when the checker cannot
-  // say, the default). Counts one distance query.
-  virtual double ClearanceAndWitness(const Config& q, ClearanceWitness* witness) const {
-    *witness = ClearanceWitness{};
-    return Clearance(q);
-  }
+  // say). Counts one distance query.
+  virtual double ClearanceAndWitness(const Config& q, ClearanceWitness* witness) const = 0;
   // Lowers the clearance of each point (at its t along the straight motion from `from` to `to`)
   // to the distance between the points of each witness there (ClearanceWitness), which bounds
   // the clearance at t from above. Lazy evaluation bounds an unchecked edge's clearance with the
   // witnesses of its ends and probes, tighter than the motion bound alone. Witnesses with
-  // body -1 are skipped; the default leaves the points as they are.
+  // body -1 are skipped.
   virtual void LowerToWitnesses(const Config& from, const Config& to,
                                 const std::vector<ClearanceWitness>& witnesses,
-                                std::vector<ClearanceSample>* points) const {
-    (void)from;
-    (void)to;
-    (void)witnesses;
-    (void)points;
-  }
+                                std::vector<ClearanceSample>* points) const = 0;
   // An upper bound on how far any point of the robot moves along the straight motion from a to
   // b (and so on how much the clearance can change along it: clearance is 1-Lipschitz in that
   // displacement). Lazy evaluation bounds an unchecked edge's clearance with it. Infinity when
   // the checker cannot say.
-  virtual double MotionBound(const Config& a, const Config& b) const {
-    (void)a;
-    (void)b;
-    return std::numeric_limits<double>::infinity();
-  }
+  virtual double MotionBound(const Config& a, const Config& b) const = 0;
   // Clearances at points of the grid a clearance profile of the motion from `from` to `to`
-  // samples (kClearance), nearest to the given fractions of the way: interior points only, none
-  // whose t is in `known`, each once, sorted by t. They are the very samples the profile would
+  // samples (EdgeProof::kProfile), nearest to the given fractions of the way: interior points only,
+  // none whose t is in `known`, each once, sorted by t. They are the very samples the profile would
   // record there, so that a bound built on them holds for the profile. Lazy evaluation tightens
-  // an edge's bound with them before it pays for the whole profile. Empty when the checker
-  // cannot say (the default) or no such point is left. Counts a distance query per sample, and
+  // an edge's bound with them before it pays for the whole profile. Empty when no such point
+  // is left. Counts a distance query per sample, and
   // with kCollisionFirst a collision check per sample (kCollisionOnly: see ProbeOrder). With
   // `witnesses`, appends where each measured clearance was found (those the checker knows).
   virtual std::vector<ClearanceSample> ProbeClearance(
       const Config& from, const Config& to, const std::vector<double>& fractions,
       const std::vector<ClearanceSample>& known, ProbeOrder order,
-      std::vector<ClearanceWitness>* witnesses = nullptr) const {
-    (void)from;
-    (void)to;
-    (void)fractions;
-    (void)known;
-    (void)order;
-    (void)witnesses;
-    return {};
-  }
+      std::vector<ClearanceWitness>* witnesses = nullptr) const = 0;
   // The number of stretches a clearance profile of a motion of this length samples (its grid
-  // has that many + 1 points, at t = k / stretches); 0 when the checker cannot say (the default).
-  virtual int ProfileStretches(double length) const {
-    (void)length;
-    return 0;
-  }
-  // Totals over every query this checker ran so far (for progress and stats).
-  virtual int64_t total_collision_checks() const = 0;
-  virtual int64_t total_distance_queries() const = 0;
+  // has that many + 1 points, at t = k / stretches).
+  virtual int ProfileStretches(double length) const = 0;
 };
 
 }  // namespace hgraph

@@ -89,7 +89,7 @@ class CheckerMotion final : public ob::MotionValidator {
   // between samples, and a path that grazes would be reported invalid by the merge it was
   // planned for.
   bool Certified(const Config& a, const Config& b) const {
-    return checker_.CheckEdge({.from = &a, .to = &b, .mode = EdgeCheckMode::kCertified}).state ==
+    return checker_.CheckEdge({.from = &a, .to = &b, .proof = EdgeProof::kCertificate}).state ==
            EdgeState::kValid;
   }
 

@@ -63,9 +63,8 @@ void ValidateEndpoint(const MotionChecker& checker, const Config& q, const std::
 // merge does when it reports the inputs' quality: a path that passes here is valid there too.
 int FirstInvalidEdge(const MotionChecker& checker, const InputPath& path) {
   for (size_t k = 0; k + 1 < path.waypoints.size(); ++k) {
-    const EdgeReport report = checker.CheckEdge({.from = &path.waypoints[k],
-                                                 .to = &path.waypoints[k + 1],
-                                                 .mode = EdgeCheckMode::kClearance});
+    const EdgeReport report = checker.CheckEdge(
+        {.from = &path.waypoints[k], .to = &path.waypoints[k + 1], .proof = EdgeProof::kProfile});
     if (report.state != EdgeState::kValid) return static_cast<int>(k);
   }
   return -1;

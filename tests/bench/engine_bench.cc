@@ -89,7 +89,7 @@ const std::vector<std::pair<Config, Config>>& LatticeEdges() {
       Config to = space.Sample(rng);
       to.head<3>() = from.head<3>() + 2.0 * (to.head<3>() - from.head<3>()).normalized();
       if (!space.InBounds(to)) continue;
-      if (planner.CheckEdge({.from = &from, .to = &to, .mode = EdgeCheckMode::kClearance}).state ==
+      if (planner.CheckEdge({.from = &from, .to = &to, .proof = EdgeProof::kProfile}).state ==
           EdgeState::kValid) {
         out.emplace_back(from, to);
       }
@@ -111,9 +111,9 @@ void BM_EdgeCheck(benchmark::State& state) {
     const auto& [from, to] = edges[i++ % edges.size()];
     const EdgeReport report = planner.CheckEdge({.from = &from,
                                                  .to = &to,
-                                                 .mode = mode == 2   ? EdgeCheckMode::kClearance
-                                                         : mode == 1 ? EdgeCheckMode::kCertified
-                                                                     : EdgeCheckMode::kSampled});
+                                                 .proof = mode == 2   ? EdgeProof::kProfile
+                                                          : mode == 1 ? EdgeProof::kCertificate
+                                                                      : EdgeProof::kSamples});
     benchmark::DoNotOptimize(report.state);
     queries += report.distance_queries;
     checks += report.collision_checks;

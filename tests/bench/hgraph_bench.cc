@@ -36,9 +36,9 @@ namespace fs = std::filesystem;
 
 // Counts the edge checks the methods ask for (OMPL's motion validator, the H-Graph's local
 // planner runs) on top of the wrapped checker's query totals. Thread safe as the wrapped one.
-class CountingChecker final : public MotionChecker {
+class CountingChecker final : public ClearanceChecker {
  public:
-  explicit CountingChecker(const MotionChecker& inner) : inner_(inner) {}
+  explicit CountingChecker(const ClearanceChecker& inner) : inner_(inner) {}
   const Space& space() const override { return inner_.space(); }
   EdgeReport CheckEdge(const EdgeCheckRequest& request) const override {
     edges_.fetch_add(1, std::memory_order_relaxed);
@@ -69,7 +69,7 @@ class CountingChecker final : public MotionChecker {
   int64_t edges() const { return edges_.load(); }
 
  private:
-  const MotionChecker& inner_;
+  const ClearanceChecker& inner_;
   mutable std::atomic<int64_t> edges_{0};
 };
 
@@ -101,7 +101,7 @@ struct Method {
   std::string label;             // for tables and the chart
   bool ompl = false;             // counts towards "best certified OMPL"
   bool clearance_bound = false;  // runs on Problem::bound_planner
-  std::function<Output(const MotionChecker&, const Problem&)> run;
+  std::function<Output(const ClearanceChecker&, const Problem&)> run;
 };
 
 struct Run {
@@ -246,7 +246,7 @@ Method HgraphMethod(const std::string& name, const std::string& label, MeasureSp
   return Method{
       .name = name,
       .label = label,
-      .run = [measure, options](const MotionChecker& checker, const Problem& p) {
+      .run = [measure, options](const ClearanceChecker& checker, const Problem& p) {
         return FromMerge(Merge(
             checker, MergeRequest{.paths = p.inputs, .measure = measure, .options = options}));
       }};
@@ -276,7 +276,7 @@ std::vector<Method> Methods(const Problem& p, bool inverse_clearance_pair, uint6
   m.push_back(Method{.name = "ompl-hybridize-gaps+simplifymax",
                      .label = "OMPL hybridize (gaps) + simplifyMax",
                      .ompl = true,
-                     .run = [res, seed](const MotionChecker& c, const Problem& q) {
+                     .run = [res, seed](const ClearanceChecker& c, const Problem& q) {
                        const InputPath h = OmplHybridize(c, q.inputs, {.resolution = res});
                        return Output{.path =
                                          SimplifyMaxPath(c, h, {.seed = seed, .resolution = res})};
@@ -285,7 +285,7 @@ std::vector<Method> Methods(const Problem& p, bool inverse_clearance_pair, uint6
       Method{.name = "ompl-hybridize-nogaps+simplifymax",
              .label = "OMPL hybridize (no gaps) + simplifyMax",
              .ompl = true,
-             .run = [res, seed](const MotionChecker& c, const Problem& q) {
+             .run = [res, seed](const ClearanceChecker& c, const Problem& q) {
                const InputPath h =
                    OmplHybridize(c, q.inputs, {.resolution = res, .match_across_gaps = false});
                return Output{.path = SimplifyMaxPath(c, h, {.seed = seed, .resolution = res})};
@@ -293,7 +293,7 @@ std::vector<Method> Methods(const Problem& p, bool inverse_clearance_pair, uint6
   m.push_back(Method{.name = "ompl-simplifymax-best-input",
                      .label = "OMPL simplifyMax on best input",
                      .ompl = true,
-                     .run = [res, seed](const MotionChecker& c, const Problem& q) {
+                     .run = [res, seed](const ClearanceChecker& c, const Problem& q) {
                        return Output{.path = SimplifyMaxPath(c, q.inputs.at(q.best_input),
                                                              {.seed = seed, .resolution = res})};
                      }});

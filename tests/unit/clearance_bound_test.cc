@@ -210,12 +210,12 @@ TEST(ClearanceBoundTest, CertificatesWithTheBoundAreExactCertificates) {
       // Short motions (a tenth of the way to the next state) are mostly free; long ones mostly
       // collide.
       const Config to = world->space().Interpolate(free[i], free[i + 1], i % 2 ? 0.1 : 1.0);
-      for (const EdgeCheckMode mode : {EdgeCheckMode::kCertified, EdgeCheckMode::kCertifiedQuick}) {
-        const EdgeCheckRequest request{.from = &free[i], .to = &to, .mode = mode};
+      for (const EdgeProof mode : {EdgeProof::kCertificate, EdgeProof::kCertificateOrGiveUp}) {
+        const EdgeCheckRequest request{.from = &free[i], .to = &to, .proof = mode};
         const EdgeReport with = bounded.CheckEdge(request);
         const EdgeReport without = exact.CheckEdge(request);
         const EdgeReport profile =
-            exact.CheckEdge({.from = &free[i], .to = &to, .mode = EdgeCheckMode::kClearance});
+            exact.CheckEdge({.from = &free[i], .to = &to, .proof = EdgeProof::kProfile});
         if (with.state == EdgeState::kInvalid) {
           EXPECT_EQ(profile.state, EdgeState::kInvalid) << "motion " << i;
         }
@@ -223,11 +223,11 @@ TEST(ClearanceBoundTest, CertificatesWithTheBoundAreExactCertificates) {
           ++certified;
           EXPECT_EQ(with.state, EdgeState::kValid);
           EXPECT_TRUE(profile.certified) << "motion " << i;
-          if (mode == EdgeCheckMode::kCertified) {
+          if (mode == EdgeProof::kCertificate) {
             EXPECT_TRUE(without.certified) << "motion " << i;
           }
         }
-        if (mode == EdgeCheckMode::kCertified) {
+        if (mode == EdgeProof::kCertificate) {
           EXPECT_EQ(with.certified, without.certified) << "motion " << i;
         }
       }

@@ -70,10 +70,9 @@ std::shared_ptr<const CollisionWorld> CircleWorld() {
 
 EdgeReport Check(const LocalPlanner& planner, const Config& from, const Config& to,
                  bool need_clearance = false) {
-  return planner.CheckEdge(
-      {.from = &from,
-       .to = &to,
-       .mode = need_clearance ? EdgeCheckMode::kClearance : EdgeCheckMode::kSampled});
+  return planner.CheckEdge({.from = &from,
+                            .to = &to,
+                            .proof = need_clearance ? EdgeProof::kProfile : EdgeProof::kSamples});
 }
 
 // Short random motions of the circle world (a fifth of a random step) whose clearance profile is
@@ -263,7 +262,7 @@ TEST(LocalPlannerTest, CertifyAgreesWithTheClearanceCheckAndCostsLess) {
     to.head<2>() = from.head<2>() + 0.15 * (to.head<2>() - from.head<2>());
     const EdgeReport profile = Check(planner, from, to, true);
     const EdgeReport certify =
-        planner.CheckEdge({.from = &from, .to = &to, .mode = EdgeCheckMode::kCertified});
+        planner.CheckEdge({.from = &from, .to = &to, .proof = EdgeProof::kCertificate});
     ASSERT_EQ(certify.state, profile.state) << "edge " << i;
     if (certify.state != EdgeState::kValid) {
       ++invalid;
@@ -292,7 +291,7 @@ TEST(LocalPlannerTest, CertifyAgreesWithTheClearanceCheckAndCostsLess) {
   for (int i = 0; i < 20; ++i) {
     const Config from = Vec({coord(rng), coord(rng)}), to = Vec({coord(rng), coord(rng)});
     const EdgeReport report =
-        open.CheckEdge({.from = &from, .to = &to, .mode = EdgeCheckMode::kCertified});
+        open.CheckEdge({.from = &from, .to = &to, .proof = EdgeProof::kCertificate});
     ASSERT_EQ(report.state, EdgeState::kValid);
     EXPECT_TRUE(report.certified);
     EXPECT_LT(report.distance_queries, 12);
@@ -303,7 +302,7 @@ TEST(LocalPlannerTest, CertifyAgreesWithTheClearanceCheckAndCostsLess) {
   const LocalPlanner coarse(PointWorld({Box(3, 5, 0.05, 4)}), {.resolution = 0.5});
   const Config a = Vec({1, 5}), b = Vec({9, 5});
   const EdgeReport thin =
-      coarse.CheckEdge({.from = &a, .to = &b, .mode = EdgeCheckMode::kCertified});
+      coarse.CheckEdge({.from = &a, .to = &b, .proof = EdgeProof::kCertificate});
   EXPECT_EQ(thin.state, EdgeState::kInvalid);
   EXPECT_FALSE(thin.certified);
 }
@@ -324,9 +323,11 @@ TEST(LocalPlannerTest, CertifyOfAValidMotionSkipsOnlyTheSamples) {
     const EdgeReport sampled = Check(planner, from, to, false);
     if (sampled.state != EdgeState::kValid) continue;
     const EdgeReport certify =
-        planner.CheckEdge({.from = &from, .to = &to, .mode = EdgeCheckMode::kCertified});
-    const EdgeReport of_valid =
-        planner.CheckEdge({.from = &from, .to = &to, .mode = EdgeCheckMode::kCertifiedOfValid});
+        planner.CheckEdge({.from = &from, .to = &to, .proof = EdgeProof::kCertificate});
+    const EdgeReport of_valid = planner.CheckEdge({.from = &from,
+                                                   .to = &to,
+                                                   .proof = EdgeProof::kCertificate,
+                                                   .known = {.samples_valid = true}});
     ++compared;
     EXPECT_EQ(of_valid.state, certify.state) << "edge " << i;
     EXPECT_EQ(of_valid.certified, certify.certified) << "edge " << i;
@@ -340,8 +341,8 @@ TEST(LocalPlannerTest, CertifyOfAValidMotionSkipsOnlyTheSamples) {
   const LocalPlanner coarse(PointWorld({Box(3, 5, 0.05, 4)}), {.resolution = 0.5});
   const Config a = Vec({1, 5}), b = Vec({9, 5});
   ASSERT_EQ(Check(coarse, a, b, false).state, EdgeState::kValid);
-  const EdgeReport thin =
-      coarse.CheckEdge({.from = &a, .to = &b, .mode = EdgeCheckMode::kCertifiedOfValid});
+  const EdgeReport thin = coarse.CheckEdge(
+      {.from = &a, .to = &b, .proof = EdgeProof::kCertificate, .known = {.samples_valid = true}});
   EXPECT_EQ(thin.state, EdgeState::kInvalid);
   EXPECT_FALSE(thin.certified);
   EXPECT_EQ(thin.collision_checks, 0);
@@ -359,16 +360,18 @@ TEST(LocalPlannerTest, EndsKnownValidSkipOnlyTheirChecks) {
     const Config from = world->space().Sample(rng);
     const Config to = world->space().Sample(rng);
     if (!context->Valid(from) || !context->Valid(to)) continue;
-    for (const EdgeCheckMode mode : {EdgeCheckMode::kSampled, EdgeCheckMode::kCertified}) {
-      const EdgeReport plain = planner.CheckEdge({.from = &from, .to = &to, .mode = mode});
-      const EdgeReport known = planner.CheckEdge(
-          {.from = &from, .to = &to, .mode = mode, .from_valid = true, .to_valid = true});
+    for (const EdgeProof mode : {EdgeProof::kSamples, EdgeProof::kCertificate}) {
+      const EdgeReport plain = planner.CheckEdge({.from = &from, .to = &to, .proof = mode});
+      const EdgeReport known = planner.CheckEdge({.from = &from,
+                                                  .to = &to,
+                                                  .proof = mode,
+                                                  .known = {.from_valid = true, .to_valid = true}});
       EXPECT_EQ(known.state, plain.state) << "edge " << i;
       EXPECT_EQ(known.invalid_at, plain.invalid_at) << "edge " << i;
       EXPECT_EQ(known.certified, plain.certified) << "edge " << i;
       EXPECT_EQ(known.collision_checks, plain.collision_checks - 2) << "edge " << i;
       EXPECT_EQ(known.distance_queries, plain.distance_queries) << "edge " << i;
-      if (mode == EdgeCheckMode::kSampled)
+      if (mode == EdgeProof::kSamples)
         (plain.state == EdgeState::kValid ? valid : invalid_inside)++;
     }
   }
@@ -389,9 +392,9 @@ TEST(LocalPlannerTest, QuickCertifyGivesUpWhereAdvancementStalls) {
     Config to = world->space().Sample(rng);
     to.head<2>() = from.head<2>() + 0.15 * (to.head<2>() - from.head<2>());
     const EdgeReport full =
-        planner.CheckEdge({.from = &from, .to = &to, .mode = EdgeCheckMode::kCertified});
+        planner.CheckEdge({.from = &from, .to = &to, .proof = EdgeProof::kCertificate});
     const EdgeReport quick =
-        planner.CheckEdge({.from = &from, .to = &to, .mode = EdgeCheckMode::kCertifiedQuick});
+        planner.CheckEdge({.from = &from, .to = &to, .proof = EdgeProof::kCertificateOrGiveUp});
     EXPECT_LE(quick.distance_queries, full.distance_queries) << "edge " << i;
     EXPECT_FALSE(quick.has_clearance) << "edge " << i;
     if (quick.state == EdgeState::kInvalid) {
@@ -412,9 +415,9 @@ TEST(LocalPlannerTest, QuickCertifyGivesUpWhereAdvancementStalls) {
   const LocalPlanner planner_box(PointWorld({Box(5, 5, 2, 2)}), {.resolution = 0.01});
   const Config a = Vec({4.5, 6 + 1e-7}), b = Vec({5.5, 6 + 1e-7});
   const EdgeReport full =
-      planner_box.CheckEdge({.from = &a, .to = &b, .mode = EdgeCheckMode::kCertified});
+      planner_box.CheckEdge({.from = &a, .to = &b, .proof = EdgeProof::kCertificate});
   const EdgeReport quick =
-      planner_box.CheckEdge({.from = &a, .to = &b, .mode = EdgeCheckMode::kCertifiedQuick});
+      planner_box.CheckEdge({.from = &a, .to = &b, .proof = EdgeProof::kCertificateOrGiveUp});
   EXPECT_EQ(full.state, EdgeState::kValid);
   EXPECT_FALSE(full.certified);
   EXPECT_EQ(quick.state, EdgeState::kValid);
@@ -673,7 +676,7 @@ TEST(LocalPlannerTest, ProfileWithKnownGridClearancesEqualsTheFullProfile) {
     ASSERT_EQ(static_cast<int>(known.size()), std::max(0, stretches - 1));
     known.insert(known.begin(), {0.0, planner.Clearance(from)});
     const EdgeReport reused = planner.CheckEdge(
-        {.from = &from, .to = &to, .mode = EdgeCheckMode::kClearance, .known = &known});
+        {.from = &from, .to = &to, .proof = EdgeProof::kProfile, .known = {.clearances = &known}});
     ASSERT_EQ(reused.state, full.state) << "edge " << i;
     if (full.state != EdgeState::kValid) {
       ++invalid;

@@ -39,9 +39,8 @@ class MergeTest : public ::testing::Test {
   // Every edge of the path passes the local planner.
   static void ExpectValid(const LocalPlanner& planner, const InputPath& path) {
     for (size_t j = 0; j + 1 < path.waypoints.size(); ++j) {
-      const EdgeReport r = planner.CheckEdge({.from = &path.waypoints[j],
-                                              .to = &path.waypoints[j + 1],
-                                              .mode = EdgeCheckMode::kSampled});
+      const EdgeReport r = planner.CheckEdge(
+          {.from = &path.waypoints[j], .to = &path.waypoints[j + 1], .proof = EdgeProof::kSamples});
       EXPECT_EQ(r.state, EdgeState::kValid) << "edge " << j;
     }
   }

@@ -57,9 +57,8 @@ PlanRequest MazeRequest(const Fixture& f, PlannerType planner, uint64_t seed) {
 void ExpectValid(const LocalPlanner& planner, const InputPath& path) {
   ASSERT_GE(path.waypoints.size(), 2u);
   for (size_t j = 0; j + 1 < path.waypoints.size(); ++j) {
-    const EdgeReport r = planner.CheckEdge({.from = &path.waypoints[j],
-                                            .to = &path.waypoints[j + 1],
-                                            .mode = EdgeCheckMode::kClearance});
+    const EdgeReport r = planner.CheckEdge(
+        {.from = &path.waypoints[j], .to = &path.waypoints[j + 1], .proof = EdgeProof::kProfile});
     EXPECT_EQ(r.state, EdgeState::kValid) << path.name << " edge " << j;
   }
 }

@@ -38,7 +38,7 @@ std::vector<EdgeReport> CertifiedEdges(const LocalPlanner& planner, const InputP
   for (size_t j = 0; j + 1 < path.waypoints.size(); ++j) {
     edges.push_back(planner.CheckEdge({.from = &path.waypoints[j],
                                        .to = &path.waypoints[j + 1],
-                                       .mode = EdgeCheckMode::kCertified}));
+                                       .proof = EdgeProof::kCertificate}));
     EXPECT_EQ(edges.back().state, EdgeState::kValid) << path.name << " edge " << j;
   }
   return edges;
@@ -115,7 +115,7 @@ TEST_F(ShortcutTest, LazyShortcutsCheckOnlyTheSamples) {
   for (size_t j = 0; j < r.edges.size(); ++j) {
     const EdgeReport sampled = planner_.CheckEdge({.from = &r.path.waypoints[j],
                                                    .to = &r.path.waypoints[j + 1],
-                                                   .mode = EdgeCheckMode::kSampled});
+                                                   .proof = EdgeProof::kSamples});
     EXPECT_EQ(sampled.state, EdgeState::kValid) << "edge " << j;
     uncertified += r.edges[j].state == EdgeState::kValid && !r.edges[j].certified;
   }
@@ -223,9 +223,8 @@ TEST_F(ShortcutTest, MotionsTheCallerKnowsAreNotCheckedAgain) {
   ASSERT_FALSE(plain.id_checks.empty());
   EXPECT_GE(plain.edges_checked, static_cast<int64_t>(plain.id_checks.size()));
   for (const auto& [a, b, report] : plain.id_checks) {
-    const EdgeReport again = planner_.CheckEdge({.from = &path_.waypoints[a],
-                                                 .to = &path_.waypoints[b],
-                                                 .mode = EdgeCheckMode::kCertified});
+    const EdgeReport again = planner_.CheckEdge(
+        {.from = &path_.waypoints[a], .to = &path_.waypoints[b], .proof = EdgeProof::kCertificate});
     EXPECT_EQ(report.state, again.state) << a << "-" << b;
   }
 
