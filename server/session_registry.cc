@@ -183,11 +183,14 @@ std::string SessionRegistry::ReserveHGraph(const std::string& session, const std
                      "or digit, got \"" +
                          ClientText(hgraph_id) + "\"");
   }
-  Touch(session, "session", tenant);
+  // The caller touched the session already; a merge that outlives the session's expiry (not
+  // yet swept) still reserves, as its KeepHGraph would still keep.
   std::lock_guard lock(mutex_);
   auto it = sessions_.find(session);
-  if (it == sessions_.end())
+  if (it == sessions_.end()) {
     throw SessionNotFound("session", "session " + session + " was deleted meanwhile");
+  }
+  CheckOwner(session, it->second, "session", tenant);
   Record& record = it->second;
   if (hgraph_id.empty()) {
     std::string name;

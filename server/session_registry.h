@@ -60,7 +60,8 @@ class SessionRegistry {
   // `fingerprint`, the request's. A name already known: ServiceError ABORTED MERGE_RUNNING
   // while its merge runs, ALREADY_EXISTS for another fingerprint, NOT_FOUND HGRAPH_NOT_FOUND once
   // retired; a kept one with the same fingerprint is returned with `*repeat` true (the caller
-  // answers what the first merge did). The session's errors as Touch.
+  // answers what the first merge did). The session must exist (NOT_FOUND) and be the tenant's
+  // (PERMISSION_DENIED); the caller has touched it.
   std::string ReserveHGraph(const std::string& session, const std::string& hgraph_id,
                             const std::string& fingerprint, const std::string& tenant,
                             bool* repeat);
