@@ -332,6 +332,26 @@ def test_a_merge_with_an_hgraph_id_survives_its_client_going_away(client):
     assert client.requery(name).path.waypoints
 
 
+def test_a_merge_that_outlived_its_client_stops_at_shutdown():
+    # Nobody waits for it any more: SIGTERM cancels it rather than waiting for it to finish.
+    s = Server("--grace-s", "0.5")
+    with s.client() as c:
+        c.create_session(c.upload_scene(DATA / "scene.json"))
+        request = service_pb2.MergePathsRequest(
+            # Dense enough that its eager checks alone outlast the stop's 20 s by far.
+            session=c.session, paths=hgraph_client.make_paths(densified(120)),
+            options=merge_pb2.MergeOptions(variant=merge_pb2.VARIANT_ALL_PAIRS,
+                                           evaluation=merge_pb2.EVALUATION_EAGER,
+                                           optimize_ms=60000),
+            hgraph_id="orphan")
+        call = c.merge_stream(request, timeout=120)
+        next(call)
+        call.cancel()
+        assert c.get_hgraph(c.session + "/hgraphs/orphan").state == \
+            service_pb2.HGraph.STATE_RUNNING
+    assert s.stop(timeout=20) == 0, "".join(s.log)
+
+
 def test_a_merge_without_an_hgraph_id_stops_with_its_client(client):
     request = service_pb2.MergePathsRequest(
         session=client.session, paths=hgraph_client.make_paths(densified(40)),
