@@ -25,8 +25,9 @@ import json, sys
 r = json.load(open(sys.argv[1]))
 ins = [i["quality"] for i in r["inputs"] if i["valid"]]
 mean = sum(q["length"] for q in ins) / len(ins)
-print(r["quality"]["length"], mean, r["quality"]["min_clearance"],
-      " ".join(str(q["min_clearance"]) for q in ins))
+# Clearances are absent where unknown (PathQuality.has_clearance false): printed as "-".
+print(r["quality"]["length"], mean, r["quality"].get("min_clearance", "-"),
+      " ".join(str(q.get("min_clearance", "-")) for q in ins))
 PY
 }
 

@@ -12,6 +12,9 @@ packages=(
   libspdlog-dev libfmt-dev libtbb-dev libompl-dev libboost-all-dev
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev
   libcivetweb-dev libssl-dev zlib1g-dev
+  # google/rpc/status.proto and error_details.proto (the rich error details the server attaches;
+  # proto/CMakeLists.txt compiles them): Debian ships googleapis' protos only in this package.
+  golang-github-gogo-googleapis-dev
   python3 python3-grpcio python3-protobuf python3-grpc-tools python3-pytest python3-pip
   python3-setuptools python3-wheel
   clang libclang-rt-14-dev

@@ -1,5 +1,7 @@
 #include "server/call_support.h"
 
+#include <google/protobuf/io/coded_stream.h>
+#include <google/protobuf/io/zero_copy_stream_impl_lite.h>
 #include <spdlog/spdlog.h>
 
 #include <new>
@@ -7,11 +9,17 @@
 #include <utility>
 
 #include "core/common/client_text.h"
+#include "core/common/digest.h"
+#include "google/rpc/error_details.pb.h"
+#include "google/rpc/status.pb.h"
 
 namespace hgraph::server {
 namespace {
 
 constexpr char kService[] = "hgraph.v1.PathMerger";
+constexpr char kDomain[] = "hgraph.v1";
+// How long a client told the server is busy waits before it retries (RetryInfo).
+constexpr std::chrono::milliseconds kBusyRetryDelay{500};
 // Every error message is escaped and bounded as a whole too (each client string in it already
 // is, at kClientTextMaxBytes): well under gRPC's 8 KiB default metadata limit.
 constexpr size_t kMaxMessageBytes = 2000;
@@ -22,25 +30,81 @@ const char* CallType(const std::string& method) {
   return "unary";
 }
 
+// The reason of an engine error that names no reason of its own.
+const char* DefaultReason(ErrorCode code) {
+  switch (code) {
+    case ErrorCode::kInvalidArgument: return "INVALID_ARGUMENT";
+    case ErrorCode::kNotFound: return "NOT_FOUND";
+    case ErrorCode::kFailedPrecondition: return "FAILED_PRECONDITION";
+    case ErrorCode::kCancelled: return "CANCELLED";
+    case ErrorCode::kDeadlineExceeded: return "DEADLINE_EXCEEDED";
+    // A limit of the request's own size: the same request fails the same way again.
+    case ErrorCode::kResourceExhausted: return "LIMIT_EXCEEDED";
+    case ErrorCode::kUnauthenticated: return "UNAUTHENTICATED";
+    case ErrorCode::kPermissionDenied: return "PERMISSION_DENIED";
+  }
+  return "UNKNOWN";
+}
+
 }  // namespace
+
+grpc::Status DetailedStatus(grpc::StatusCode code, const std::string& message,
+                            const std::string& field, const std::string& reason,
+                            std::chrono::milliseconds retry_delay) {
+  if (code == grpc::StatusCode::OK) return grpc::Status::OK;
+  google::rpc::Status details;
+  details.set_code(static_cast<int>(code));
+  details.set_message(message);
+  google::rpc::ErrorInfo info;
+  info.set_reason(reason);
+  info.set_domain(kDomain);
+  if (!field.empty()) (*info.mutable_metadata())["field"] = field;
+  details.add_details()->PackFrom(info);
+  if (!field.empty() &&
+      (code == grpc::StatusCode::INVALID_ARGUMENT || code == grpc::StatusCode::RESOURCE_EXHAUSTED ||
+       code == grpc::StatusCode::NOT_FOUND)) {
+    google::rpc::BadRequest bad;
+    google::rpc::BadRequest::FieldViolation* violation = bad.add_field_violations();
+    violation->set_field(field);
+    // The message without the "field: " it starts with.
+    const std::string prefix = field + ": ";
+    violation->set_description(message.rfind(prefix, 0) == 0 ? message.substr(prefix.size())
+                                                             : message);
+    details.add_details()->PackFrom(bad);
+  }
+  if (retry_delay.count() > 0) {
+    google::rpc::RetryInfo retry;
+    retry.mutable_retry_delay()->set_seconds(retry_delay.count() / 1000);
+    retry.mutable_retry_delay()->set_nanos(static_cast<int32_t>(retry_delay.count() % 1000) *
+                                           1000000);
+    details.add_details()->PackFrom(retry);
+  }
+  return grpc::Status(code, message, details.SerializeAsString());
+}
 
 grpc::Status Invoke(const std::function<void()>& body, const CancelToken& token) {
   try {
     body();
     return grpc::Status::OK;
+  } catch (const ServiceError& e) {
+    return DetailedStatus(e.status(), ClientText(e.what(), kMaxMessageBytes), e.field(), e.reason(),
+                          e.retry_delay());
   } catch (const Error& e) {
     grpc::StatusCode code = ToGrpcCode(e.code());
     if (code == grpc::StatusCode::CANCELLED && token.deadline_passed()) {
-      return grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED, "deadline exceeded");
+      return DetailedStatus(grpc::StatusCode::DEADLINE_EXCEEDED, "deadline exceeded", "",
+                            "DEADLINE_EXCEEDED");
     }
-    return grpc::Status(code, ClientText(e.what(), kMaxMessageBytes));
+    return DetailedStatus(code, ClientText(e.what(), kMaxMessageBytes), e.field(),
+                          DefaultReason(e.code()));
   } catch (const std::bad_alloc&) {
-    return grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED, "out of memory");
+    return DetailedStatus(grpc::StatusCode::RESOURCE_EXHAUSTED, "out of memory", "",
+                          "OUT_OF_MEMORY");
   } catch (const std::exception& e) {
     // A broken invariant (InternalError) fails this call only; it is a bug worth a log line.
     const std::string message = ClientText(e.what(), kMaxMessageBytes);
     spdlog::error("internal error: {}", message);
-    return grpc::Status(grpc::StatusCode::INTERNAL, message);
+    return DetailedStatus(grpc::StatusCode::INTERNAL, message, "", "INTERNAL");
   }
 }
 
@@ -52,17 +116,22 @@ void WireDeadline(grpc::CallbackServerContext* context, const CancelToken& token
 }
 
 grpc::Status Busy(const WorkerPool& pool) {
-  return grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
-                      "the server is busy: " + std::to_string(pool.max_admitted()) +
-                          " calls are queued or running (--max-pending); retry later");
+  return DetailedStatus(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                        "the server is busy: " + std::to_string(pool.max_admitted()) +
+                            " calls are queued or running (--max-pending); retry later",
+                        "", "SERVER_BUSY", kBusyRetryDelay);
+}
+
+void CheckPathCount(int64_t count, const std::string& field, const std::string& what,
+                    const ServerOptions& options) {
+  if (count <= options.max_paths) return;
+  throw Error(ErrorCode::kResourceExhausted, field,
+              std::to_string(count) + " " + what + " exceed the limit of " +
+                  std::to_string(options.max_paths) + " (--max-paths)");
 }
 
 void CheckBatchLimits(const v1::PathSet& paths, const ServerOptions& options) {
-  if (paths.paths_size() > options.max_paths) {
-    throw Error(ErrorCode::kResourceExhausted, "paths.paths",
-                std::to_string(paths.paths_size()) + " paths exceed the limit of " +
-                    std::to_string(options.max_paths) + " per batch (--max-paths)");
-  }
+  CheckPathCount(paths.paths_size(), "paths.paths", "paths per batch", options);
   for (int i = 0; i < paths.paths_size(); ++i) {
     if (paths.paths(i).waypoints_size() > options.max_waypoints) {
       throw Error(ErrorCode::kResourceExhausted, "paths.paths[" + std::to_string(i) + "].waypoints",
@@ -71,6 +140,95 @@ void CheckBatchLimits(const v1::PathSet& paths, const ServerOptions& options) {
                       " per path (--max-waypoints)");
     }
   }
+}
+
+void WithRequestPaths(const std::function<void()>& body) {
+  try {
+    body();
+  } catch (const ServiceError&) {
+    throw;
+  } catch (const Error& e) {
+    if (e.field() != "paths" && e.field().rfind("paths[", 0) != 0) throw;
+    throw Error(e.code(), "paths." + e.field(), std::string(e.what()).substr(e.field().size() + 2));
+  }
+}
+
+void EchoEvaluation(const v1::MergeOptions& options, v1::MergeResult* result) {
+  result->set_evaluation(options.evaluation() == v1::EVALUATION_UNSPECIFIED ? v1::EVALUATION_LAZY
+                                                                            : options.evaluation());
+}
+
+std::string RequestFingerprint(const google::protobuf::Message& request, int ignored) {
+  std::unique_ptr<google::protobuf::Message> copy(request.New());
+  copy->CopyFrom(request);
+  if (ignored > 0) {
+    const google::protobuf::FieldDescriptor* field =
+        copy->GetDescriptor()->FindFieldByNumber(ignored);
+    if (field != nullptr) copy->GetReflection()->ClearField(copy.get(), field);
+  }
+  std::string bytes;
+  {
+    google::protobuf::io::StringOutputStream stream(&bytes);
+    google::protobuf::io::CodedOutputStream coded(&stream);
+    coded.SetSerializationDeterministic(true);
+    copy->SerializeToCodedStream(&coded);
+  }
+  return Sha256Hex(bytes);
+}
+
+PathMergerService::CallBase::CallBase(PathMergerService* service,
+                                      grpc::CallbackServerContext* context, std::string method,
+                                      std::string session, bool wire_deadline)
+    : service_(service),
+      method_(std::move(method)),
+      session_(std::move(session)),
+      started_(service->RecordStart(method_)) {
+  if (wire_deadline) WireDeadline(context, token_);
+  auth_ = service->options().auth.Authenticate(*context, &tenant_);
+}
+
+bool PathMergerService::CallBase::Authenticated() {
+  if (auth_.ok()) return true;
+  Complete(auth_);
+  return false;
+}
+
+bool PathMergerService::CallBase::Submit(std::function<void()> body) {
+  const bool admitted =
+      service_->pool().TrySubmit([this, body = std::move(body)](WorkerPool::Slot& slot) {
+        const grpc::Status status = Invoke(body, token_);
+        slot.Release();
+        Complete(status);
+      });
+  if (!admitted) Complete(Busy(service_->pool()));
+  return admitted;
+}
+
+bool PathMergerService::CallBase::Hold() {
+  if (service_->pool().TryHold()) return true;
+  Complete(Busy(service_->pool()));
+  return false;
+}
+
+void PathMergerService::CallBase::SubmitHeld(std::function<void()> body) {
+  service_->pool().SubmitHeld([this, body = std::move(body)](WorkerPool::Slot& slot) {
+    const grpc::Status status = Invoke(body, token_);
+    slot.Release();
+    Complete(status);
+  });
+}
+
+void PathMergerService::CallBase::RunHere(const std::function<void()>& body) {
+  Complete(Invoke(body, token_));
+}
+
+grpc::Status PathMergerService::CallBase::Final(const grpc::Status& status) {
+  grpc::Status out = status;
+  if (!out.ok() && out.error_details().empty()) {
+    out = DetailedStatus(out.error_code(), out.error_message(), "", GrpcCodeName(out.error_code()));
+  }
+  if (!recorded_.exchange(true)) service_->RecordCall(method_, session_, started_, out);
+  return out;
 }
 
 MergeResult QueryStored(PathMergerService::StoredHGraph& stored, const MeasureSpec& measure,

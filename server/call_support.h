@@ -5,12 +5,17 @@
 
 #include <grpcpp/grpcpp.h>
 
+#include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <deque>
 #include <functional>
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "core/common/error.h"
 #include "core/common/progress.h"
@@ -26,28 +31,119 @@ namespace hgraph::server {
 
 using Clock = std::chrono::steady_clock;
 
-// Runs `body` and turns whatever it throws into a canonical status. A cancellation that comes
-// from the passed deadline (gRPC cancels the call at the deadline too) is DEADLINE_EXCEEDED.
+// The one place a status the service answers gets its details (hgraph/v1/service.proto lists
+// them): a google.rpc.Status in the status's binary details with an ErrorInfo (`reason`, domain
+// "hgraph.v1", metadata "field" when one is named), a BadRequest field violation for a named
+// field of INVALID_ARGUMENT, RESOURCE_EXHAUSTED and NOT_FOUND, and a RetryInfo when
+// `retry_delay` is positive. OK stays OK.
+grpc::Status DetailedStatus(grpc::StatusCode code, const std::string& message,
+                            const std::string& field, const std::string& reason,
+                            std::chrono::milliseconds retry_delay = std::chrono::milliseconds(0));
+
+// Runs `body` and turns whatever it throws into a canonical status with its details. A
+// cancellation that comes from the passed deadline (gRPC cancels the call at the deadline too)
+// is DEADLINE_EXCEEDED.
 grpc::Status Invoke(const std::function<void()>& body, const CancelToken& token);
 
 // The call's deadline, if any, on the token (the engine polls it).
 void WireDeadline(grpc::CallbackServerContext* context, const CancelToken& token);
 
-// RESOURCE_EXHAUSTED: the worker pool's admission queue is full.
+// RESOURCE_EXHAUSTED, reason SERVER_BUSY with RetryInfo: the worker pool's admission queue is
+// full.
 grpc::Status Busy(const WorkerPool& pool);
+
+// Throws Error(kResourceExhausted, field) when `count` paths exceed --max-paths. `what` says
+// what the count is ("paths per batch", "inputs of sessions/.../hgraphs/x").
+void CheckPathCount(int64_t count, const std::string& field, const std::string& what,
+                    const ServerOptions& options);
 
 // Checks a batch against the server's limits (--max-paths, --max-waypoints) before any work.
 void CheckBatchLimits(const v1::PathSet& paths, const ServerOptions& options);
 
+// Runs `body`, which hands the request's `paths.paths` to the engine, and names the paths in an
+// engine error as the request does: the engine names them as its own list ("paths[1]" or
+// "paths"), the request nests them ("paths.paths[1]").
+void WithRequestPaths(const std::function<void()>& body);
+
+// Sets result.evaluation from the merge's options (unspecified: lazy).
+void EchoEvaluation(const v1::MergeOptions& options, v1::MergeResult* result);
+
+// What every reactor does around its work, written once: the deadline on its cancel token
+// (unless the call outlives its client), the caller's tenant, admission to the worker pool with
+// the slot released as soon as the work returns, the details of the status it ends with, and
+// one call record (a log line and the gRPC metrics). Each reactor derives from it and from its
+// gRPC reactor, and ends the call in Complete. Not copyable or movable.
+class PathMergerService::CallBase {
+ public:
+  CallBase(PathMergerService* service, grpc::CallbackServerContext* context, std::string method,
+           std::string session, bool wire_deadline = true);
+  CallBase(const CallBase&) = delete;
+  CallBase& operator=(const CallBase&) = delete;
+  virtual ~CallBase() = default;
+
+  // The caller's tenant (server/auth.h), for the session registry.
+  const std::string& tenant() const { return tenant_; }
+  const CancelToken& token() const { return token_; }
+
+ protected:
+  // Ends the call with `status`: the reactor's Finish (after its last write), once.
+  virtual void Complete(const grpc::Status& status) = 0;
+
+  // False after completing the call with UNAUTHENTICATED when the caller's credentials fail.
+  bool Authenticated();
+  // Runs `body` on the worker pool (Invoke's status mapping), releases the slot, then completes
+  // the call with `body`'s status. False after completing it with Busy() when the admission
+  // queue is full.
+  bool Submit(std::function<void()> body);
+  // Takes an admission slot now for work submitted later by SubmitHeld (a client stream holds
+  // it while it reads). False after completing the call with Busy().
+  bool Hold();
+  void SubmitHeld(std::function<void()> body);
+  // Runs `body` here, on the gRPC thread (lookups only), and completes the call with its status.
+  void RunHere(const std::function<void()>& body);
+  // The status to finish with: counted and logged the first time (later calls only pass it
+  // through), with details when the code that made it attached none (ErrorInfo with the code's
+  // name as the reason).
+  grpc::Status Final(const grpc::Status& status);
+
+  PathMergerService* service_;
+  const std::string method_;
+  const std::string session_;
+  const Clock::time_point started_;
+  CancelToken token_;
+  std::string tenant_;
+
+ private:
+  grpc::Status auth_;
+  std::atomic<bool> recorded_{false};
+};
+
 // An H-Graph kept for re-queries, with the local planner its edges were checked with.
 struct PathMergerService::StoredHGraph {
-  std::mutex mutex;         // guards session and version
-  std::mutex adding_mutex;  // held by an AddPaths for its whole call: additions never race
+  std::mutex mutex;         // guards session, version and generation
+  std::mutex adding_mutex;  // held by AddToStored for its whole call: additions never race
   LoadedScene scene;
   std::unique_ptr<LocalPlanner> planner;
   std::unique_ptr<HybridizationSession> session;
-  uint64_t version = 0;  // bumped each time a query's copy replaces `session`
+  uint64_t version = 0;    // bumped each time a query's copy replaces `session`
+  int64_t generation = 1;  // 1 after the merge, +1 per AddPaths (HGraph.generation)
+  // What the merge was asked and answered (GetHGraph, and a repeat of its hgraph_id).
+  v1::Measure measure;
+  v1::MergeOptions options;
+  std::string fingerprint;  // RequestFingerprint of the MergePathsRequest
+  v1::MergePathsResponse answer;
+  std::vector<std::string> input_names;  // the merge's, then each addition's
+  // AddPaths' request ids (AIP-155), the last kMaxRequestIds of them, with the fingerprint of
+  // the request and its answer; and the lock an AddPaths holds from its look-up here to its
+  // answer's record, so that a repeat waits for the first to answer.
+  static constexpr size_t kMaxRequestIds = 64;
+  std::mutex requests_mutex;
+  std::deque<std::pair<std::string, std::pair<std::string, v1::AddPathsResponse>>> requests;
 };
+
+// SHA-256 of `request`'s deterministic serialization with `ignored` (a field number of its
+// message) cleared: what a repeat with the same request id must match.
+std::string RequestFingerprint(const google::protobuf::Message& request, int ignored = 0);
 
 // Searches a stored H-Graph under `measure` (Requery) without holding it: the query runs on a
 // copy taken under the mutex, and the copy, with the edges the query checked, replaces the

@@ -267,6 +267,8 @@ int main(int argc, char** argv) {
     }
     const auto grace = std::chrono::system_clock::now() +
                        std::chrono::milliseconds(static_cast<int64_t>(flags.grace_s * 1e3));
+    // Merges that outlived their clients (hgraph_id) stop now: nobody could fetch their result.
+    service.BeginShutdown();
     // Refuses new calls at once; cancels calls still running at the deadline, which stops their
     // merges through the cancel token.
     server->Shutdown(grace);

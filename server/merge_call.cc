@@ -18,34 +18,31 @@ namespace hgraph::server {
 // result. A report that comes while a write is in flight is dropped, unless it is one of the
 // post-optimization's (an objective, maybe a path: the best so far): that one waits, a newer one
 // replacing it, and goes out when the write is done, before the result.
-class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::MergePathsResponse> {
+class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::MergePathsResponse>,
+                                           public CallBase {
  public:
   MergeCall(PathMergerService* service, grpc::CallbackServerContext* context,
             const v1::MergePathsRequest* request)
-      : service_(service), request_(request) {
-    WireDeadline(context, token_);
-    if (grpc::Status auth = service->options().auth.Authenticate(*context, &tenant_); !auth.ok()) {
-      Complete(auth, false);
-      return;
-    }
+      // A merge with an hgraph_id outlives its client: its deadline does not stop it.
+      : CallBase(service, context, "MergePaths", request->session(),
+                 /*wire_deadline=*/request->hgraph_id().empty()),
+        request_(request),
+        durable_(!request->hgraph_id().empty()) {
+    if (!Authenticated()) return;
     if (request->progress_interval_ms() < 0 ||
         request->progress_interval_ms() > limits::kMaxProgressIntervalMs) {
-      Complete(grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
-                            "progress_interval_ms: must be in [0, " +
-                                std::to_string(limits::kMaxProgressIntervalMs) +
-                                "] (0 = the "
-                                "server's default), got " +
-                                std::to_string(request->progress_interval_ms())),
-               false);
+      const std::string message =
+          "progress_interval_ms: must be in [0, " + std::to_string(limits::kMaxProgressIntervalMs) +
+          "] (0 = the server's default), got " + std::to_string(request->progress_interval_ms());
+      Complete(DetailedStatus(grpc::StatusCode::INVALID_ARGUMENT, message, "progress_interval_ms",
+                              "INVALID_ARGUMENT"));
       return;
     }
     const int interval = request->progress_interval_ms() > 0
                              ? request->progress_interval_ms()
                              : service->options().progress_interval_ms;
     interval_ = std::chrono::milliseconds(interval);
-    const bool admitted =
-        service_->pool().TrySubmit([this](WorkerPool::Slot& slot) { Work(slot); });
-    if (!admitted) Complete(Busy(service_->pool()), false);
+    Submit([this] { Merge(&final_); });
   }
 
   void OnWriteDone(bool ok) override {
@@ -64,21 +61,23 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
       }
     }
     // A failed write means the client has gone: stop the work.
-    if (!ok) token_.Cancel();
+    if (!ok) ClientGone();
     if (send_final) SendFinal();
     if (send_waiting) StartWrite(&progress_message_);
   }
 
-  void OnCancel() override { token_.Cancel(); }
+  void OnCancel() override { ClientGone(); }
   void OnDone() override { delete this; }
 
  private:
-  void Work(WorkerPool::Slot& slot) {
-    v1::MergePathsResponse final_message;
-    const grpc::Status status = Invoke([&] { Merge(&final_message); }, token_);
-    if (status.ok()) final_ = std::move(final_message);
-    slot.Release();
-    Complete(status, status.ok());
+  // The client went away (a cancel, a failed write, or its deadline): the merge stops, unless it
+  // has an hgraph_id, which keeps it going until it is done (or the server shuts down).
+  void ClientGone() {
+    if (!durable_) return token_.Cancel();
+    std::lock_guard lock(mutex_);
+    if (final_pending_ || durable_registered_) return;
+    durable_registered_ = service_->AddDurable(token_, &durable_id_);
+    if (!durable_registered_) token_.Cancel();
   }
 
   void Merge(v1::MergePathsResponse* out) {
@@ -86,6 +85,35 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
     const v1::Session session = service_->sessions_.Touch(request.session(), "session", tenant_);
     CheckBatchLimits(request.paths(), service_->options());
     if (request.paths().paths_size() == 0) throw InputError("paths.paths", "must not be empty");
+    // A repeat under the same hgraph_id matches on everything but the progress rate.
+    const std::string fingerprint =
+        RequestFingerprint(request, v1::MergePathsRequest::kProgressIntervalMsFieldNumber);
+    bool repeat = false;
+    const std::string name = service_->sessions_.ReserveHGraph(session.name(), request.hgraph_id(),
+                                                               fingerprint, tenant_, &repeat);
+    if (repeat) {
+      const auto stored = service_->cache_.Get<StoredHGraph>(CacheKind::kHGraph, name);
+      if (!stored) {
+        throw ServiceError(grpc::StatusCode::NOT_FOUND, "HGRAPH_NOT_FOUND", "hgraph_id",
+                           name +
+                               " is no longer held by this server; merge again under a new "
+                               "hgraph_id");
+      }
+      *out = stored->answer;
+      return;
+    }
+    try {
+      Build(session, name, fingerprint, out);
+    } catch (...) {
+      // Nothing kept under the name: a retry may merge again.
+      service_->sessions_.AbandonHGraph(name);
+      throw;
+    }
+  }
+
+  void Build(const v1::Session& session, const std::string& name, const std::string& fingerprint,
+             v1::MergePathsResponse* out) {
+    const v1::MergePathsRequest& request = *request_;
     LoadedScene scene = service_->scenes_.Get(session.scene(), "session", token_);
     token_.ThrowIfStopped();
 
@@ -105,34 +133,39 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
     stored->planner = std::make_unique<LocalPlanner>(
         scene.world,
         LocalPlannerOptions{.resolution = resolution, .clearance_bound = scene.clearance_bound});
-    try {
-      stored->session = std::make_unique<HybridizationSession>(*stored->planner, merge);
-    } catch (const Error& e) {
-      // The engine names the paths as its own list ("paths[1].waypoints[3]"); the client sent
-      // them as the request's "paths.paths", as every other message here names them.
-      if (e.field().rfind("paths[", 0) != 0) throw;
-      throw Error(e.code(), "paths." + e.field(),
-                  std::string(e.what()).substr(e.field().size() + 2));
-    }
+    WithRequestPaths(
+        [&] { stored->session = std::make_unique<HybridizationSession>(*stored->planner, merge); });
     const MergeResult result = stored->session->Query(merge.measure, merge.progress, token_);
     *out->mutable_result() = MergeResultToProto(result);
+    EchoEvaluation(request.options(), out->mutable_result());
     service_->RecordMerge("MergePaths", out->result());
+    stored->measure = request.measure();
+    stored->options = request.options();
+    stored->fingerprint = fingerprint;
+    for (const v1::Path& path : request.paths().paths()) stored->input_names.push_back(path.name());
 
-    Keep(session.name(), std::move(stored), out);
+    Keep(session.name(), name, std::move(stored), out);
   }
 
   // Stores the H-Graph for re-queries and names it in `out`. A session deleted (or expired)
   // while the merge ran gets no H-Graph, but the client still gets its result.
-  void Keep(const std::string& session, std::shared_ptr<StoredHGraph> stored,
-            v1::MergePathsResponse* out) {
-    std::string name;
+  void Keep(const std::string& session, const std::string& name,
+            std::shared_ptr<StoredHGraph> stored, v1::MergePathsResponse* out) {
+    // What a repeat of the request answers.
+    out->set_hgraph(name);
+    out->set_generation(stored->generation);
+    stored->answer = *out;
+    const auto not_kept = [out] {
+      out->clear_hgraph();
+      out->clear_generation();
+    };
     try {
-      name = service_->sessions_.AddHGraph(session);
+      service_->sessions_.KeepHGraph(name);
     } catch (const Error& e) {
       if (e.code() != ErrorCode::kNotFound) throw;
       spdlog::info("MergePaths session={} was deleted while the merge ran; H-Graph not kept",
                    session);
-      return;
+      return not_kept();
     }
     const size_t bytes = stored->session->memory_bytes();
     if (!service_->cache_.Put(CacheKind::kHGraph, name, std::move(stored), bytes)) {
@@ -140,19 +173,18 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
       service_->sessions_.RemoveHGraph(name);
       spdlog::warn("MergePaths session={} H-Graph of {} bytes exceeds --cache-bytes; not kept",
                    session, bytes);
-      return;
+      return not_kept();
     }
     try {
-      // Deleted between AddHGraph and the Put: DeleteSession could not drop what was not yet
+      // Deleted between KeepHGraph and the Put: DeleteSession could not drop what was not yet
       // in the cache, so this call does.
       // (Re-created since by another tenant: not this call's session any more either.)
       service_->sessions_.Touch(session, "session", tenant_);
     } catch (const Error& e) {
       if (e.code() != ErrorCode::kNotFound && e.code() != ErrorCode::kPermissionDenied) throw;
       service_->cache_.Erase(CacheKind::kHGraph, name);
-      return;
+      return not_kept();
     }
-    out->set_hgraph(name);
   }
 
   // Called from engine worker threads.
@@ -199,14 +231,15 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
     }
   }
 
-  void Complete(const grpc::Status& status, bool with_result) {
-    service_->RecordCall("MergePaths", request_->session(), started_, status);
+  void Complete(const grpc::Status& status) override {
     bool send_final = false;
     {
       std::lock_guard lock(mutex_);
-      status_ = status;
-      with_result_ = with_result;
+      status_ = Final(status);
+      with_result_ = status.ok();
       final_pending_ = true;
+      if (durable_registered_) service_->RemoveDurable(durable_id_);
+      durable_registered_ = false;
       if (!writing_) send_final = final_sent_ = true;
     }
     if (send_final) SendFinal();
@@ -220,11 +253,8 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
     }
   }
 
-  PathMergerService* service_;
   const v1::MergePathsRequest* request_;
-  Clock::time_point started_ = service_->RecordStart("MergePaths");
-  CancelToken token_;
-  std::string tenant_;  // the caller's (server/auth.h)
+  const bool durable_;  // has an hgraph_id: outlives its client
   std::chrono::milliseconds interval_{100};
 
   std::mutex mutex_;
@@ -237,6 +267,8 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
   // A report of the post-optimization that came while a write was in flight.
   v1::MergePathsResponse waiting_message_;
   bool improvement_waiting_ = false;
+  bool durable_registered_ = false;  // with the service, after the client went away
+  uint64_t durable_id_ = 0;
   v1::MergePathsResponse final_;
   grpc::Status status_;
   bool with_result_ = false;

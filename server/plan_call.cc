@@ -17,19 +17,14 @@ namespace hgraph::server {
 #ifdef HGRAPH_HAVE_PLAN
 // PlanPaths: plans on a worker; each path found is queued and written in order, one write in
 // flight, then the status.
-class PathMergerService::PlanCall final : public grpc::ServerWriteReactor<v1::PlanPathsResponse> {
+class PathMergerService::PlanCall final : public grpc::ServerWriteReactor<v1::PlanPathsResponse>,
+                                          public CallBase {
  public:
   PlanCall(PathMergerService* service, grpc::CallbackServerContext* context,
            const v1::PlanPathsRequest* request)
-      : service_(service), request_(request) {
-    WireDeadline(context, token_);
-    if (grpc::Status auth = service->options().auth.Authenticate(*context, &tenant_); !auth.ok()) {
-      Complete(auth);
-      return;
-    }
-    if (!service_->pool().TrySubmit([this](WorkerPool::Slot& slot) { Work(slot); })) {
-      Complete(Busy(service_->pool()));
-    }
+      : CallBase(service, context, "PlanPaths", request->session()), request_(request) {
+    if (!Authenticated()) return;
+    Submit([this] { Plan(); });
   }
 
   void OnWriteDone(bool ok) override {
@@ -40,12 +35,6 @@ class PathMergerService::PlanCall final : public grpc::ServerWriteReactor<v1::Pl
   void OnDone() override { delete this; }
 
  private:
-  void Work(WorkerPool::Slot& slot) {
-    const grpc::Status status = Invoke([&] { Plan(); }, token_);
-    slot.Release();
-    Complete(status);
-  }
-
   void Plan() {
     const v1::PlanPathsRequest& request = *request_;
     const v1::Session session = service_->sessions_.Touch(request.session(), "session", tenant_);
@@ -57,11 +46,7 @@ class PathMergerService::PlanCall final : public grpc::ServerWriteReactor<v1::Pl
       limits::RequirePositiveUpTo(request.time_per_path_s(), limits::kMaxPlanSeconds,
                                   "time_per_path_s");
     }
-    if (request.count() > service_->options().max_paths) {
-      throw Error(ErrorCode::kResourceExhausted, "count",
-                  std::to_string(request.count()) + " paths exceed the limit of " +
-                      std::to_string(service_->options().max_paths) + " (--max-paths)");
-    }
+    CheckPathCount(request.count(), "count", "paths", service_->options());
     LoadedScene scene = service_->scenes_.Get(session.scene(), "session", token_);
     const Scene& model = scene.world->scene();
     PlanRequest plan{.planner = request.planner().empty()
@@ -105,11 +90,10 @@ class PathMergerService::PlanCall final : public grpc::ServerWriteReactor<v1::Pl
     ::hgraph::PlanPaths(checker, plan);
   }
 
-  void Complete(const grpc::Status& status) {
-    service_->RecordCall("PlanPaths", request_->session(), started_, status);
+  void Complete(const grpc::Status& status) override {
     {
       std::lock_guard lock(mutex_);
-      status_ = status;
+      status_ = Final(status);
       done_ = true;
     }
     Pump(/*write_done=*/false);
@@ -138,11 +122,7 @@ class PathMergerService::PlanCall final : public grpc::ServerWriteReactor<v1::Pl
     if (action == kFinish) Finish(status_);
   }
 
-  PathMergerService* service_;
   const v1::PlanPathsRequest* request_;
-  Clock::time_point started_ = service_->RecordStart("PlanPaths");
-  CancelToken token_;
-  std::string tenant_;  // the caller's (server/auth.h)
   std::mutex mutex_;
   std::deque<v1::PlanPathsResponse> queue_;
   bool writing_ = false;
@@ -164,9 +144,11 @@ grpc::ServerWriteReactor<v1::PlanPathsResponse>* PathMergerService::PlanPaths(
     explicit Unimplemented(const grpc::Status& status) { Finish(status); }
     void OnDone() override { delete this; }
   };
-  const grpc::Status status(grpc::StatusCode::UNIMPLEMENTED,
-                            "PlanPaths: this server was built without core/plan (the OMPL "
-                            "input planners); generate paths on the client");
+  const grpc::Status status = DetailedStatus(
+      grpc::StatusCode::UNIMPLEMENTED,
+      "PlanPaths: this server was built without core/plan (the OMPL input planners); generate "
+      "paths on the client",
+      "", "UNIMPLEMENTED");
   RecordCall("PlanPaths", request->session(), RecordStart("PlanPaths"), status);
   return new Unimplemented(status);
 }

@@ -9,6 +9,7 @@
 #include "core/common/client_text.h"
 #include "core/common/digest.h"
 #include "core/common/error.h"
+#include "server/status/status.h"
 
 namespace hgraph::server {
 namespace {
@@ -50,9 +51,9 @@ void CheckMesh(const v1::Shape& shape, const std::string& field, const SceneStor
     case v1::MeshRef::kDigest:
       ValidateDigest(mesh.digest(), mesh_field + ".digest");
       if (!store.HasBlob(mesh.digest())) {
-        throw Error(ErrorCode::kNotFound, mesh_field + ".digest",
-                    "blob " + DigestText(mesh.digest()) +
-                        " is not held by this server; upload it with UploadBlob first");
+        throw ServiceError(grpc::StatusCode::NOT_FOUND, "BLOB_NOT_FOUND", mesh_field + ".digest",
+                           "blob " + DigestText(mesh.digest()) +
+                               " is not held by this server; upload it with UploadBlob first");
       }
       return;
     case v1::MeshRef::kData: return;
@@ -203,10 +204,10 @@ LoadedScene SceneStore::Load(const v1::Digest& digest, const std::string& field,
   const std::string& sha = digest.sha256();
   auto proto = cache_.Get<const v1::Scene>(CacheKind::kScene, sha);
   if (!proto) {
-    throw Error(ErrorCode::kNotFound, field,
-                "scene sha256:" + sha +
-                    " is not held by this server (never stored, or evicted under the memory "
-                    "budget); store it again with PutScene");
+    throw ServiceError(grpc::StatusCode::NOT_FOUND, "SCENE_NOT_FOUND", field,
+                       "scene sha256:" + sha +
+                           " is not held by this server (never stored, or evicted under the "
+                           "memory budget); store it again with PutScene");
   }
   CheckSceneSize(*proto, digest, field);
   BlobResolver resolver = [this](const v1::Digest& blob_digest) -> std::optional<std::string> {
@@ -225,7 +226,9 @@ LoadedScene SceneStore::Load(const v1::Digest& digest, const std::string& field,
     scene = SceneFromProto(*proto, "", resolver, load_bytes);
   } catch (const Error& e) {
     // A blob evicted since PutScene: the client uploads it again.
-    if (e.code() == ErrorCode::kNotFound) throw Error(ErrorCode::kNotFound, field, e.what());
+    if (e.code() == ErrorCode::kNotFound) {
+      throw ServiceError(grpc::StatusCode::NOT_FOUND, "BLOB_NOT_FOUND", field, e.what());
+    }
     throw;
   }
   auto geometry = std::make_shared<SceneGeometry>();

@@ -45,6 +45,25 @@ void PathMergerService::DropHGraphs(const std::vector<std::string>& names) {
   for (const std::string& name : names) cache_.Erase(CacheKind::kHGraph, name);
 }
 
+void PathMergerService::BeginShutdown() {
+  std::lock_guard lock(durable_mutex_);
+  shutting_down_ = true;
+  for (const auto& [id, token] : durable_) token.Cancel();
+}
+
+bool PathMergerService::AddDurable(const CancelToken& token, uint64_t* id) {
+  std::lock_guard lock(durable_mutex_);
+  if (shutting_down_) return false;
+  *id = next_durable_++;
+  durable_.emplace(*id, token);
+  return true;
+}
+
+void PathMergerService::RemoveDurable(uint64_t id) {
+  std::lock_guard lock(durable_mutex_);
+  durable_.erase(id);
+}
+
 void PathMergerService::ExpireIdleSessions() {
   const std::vector<std::string> dropped = sessions_.ExpireIdle(SessionRegistry::Clock::now());
   if (!dropped.empty()) spdlog::info("expired sessions dropped {} H-Graphs", dropped.size());

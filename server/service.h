@@ -6,11 +6,13 @@
 
 #include <chrono>
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <set>
 #include <string>
 
+#include "core/common/progress.h"
 #include "hgraph/v1/service.grpc.pb.h"
 #include "server/auth.h"
 #include "server/mesh_importer.h"
@@ -83,12 +85,22 @@ class PathMergerService final : public v1::PathMerger::CallbackService {
   grpc::ServerUnaryReactor* CheckPaths(grpc::CallbackServerContext* context,
                                        const v1::CheckPathsRequest* request,
                                        v1::CheckPathsResponse* response) override;
+  grpc::ServerUnaryReactor* GetHGraph(grpc::CallbackServerContext* context,
+                                      const v1::GetHGraphRequest* request,
+                                      v1::HGraph* response) override;
+  grpc::ServerUnaryReactor* DeleteHGraph(grpc::CallbackServerContext* context,
+                                         const v1::DeleteHGraphRequest* request,
+                                         v1::DeleteHGraphResponse* response) override;
 
   // Drops sessions idle past their time-to-live and their H-Graphs; called periodically.
   void ExpireIdleSessions();
   // Aborts UploadBlob streams idle past options().upload_idle_timeout (ABORTED), releasing
   // their reserved bytes and admission slots; called periodically.
   void ExpireIdleUploads();
+  // Cancels the merges that outlived their clients (MergePathsRequest.hgraph_id), and makes
+  // every other one stop with its call: called before the gRPC server shuts down, whose
+  // cancellation of the calls at the end of the grace period then stops them.
+  void BeginShutdown();
   // Waits for every admitted job (after the gRPC server has shut down).
   void WaitIdle() { pool_.WaitIdle(); }
 
@@ -100,6 +112,7 @@ class PathMergerService final : public v1::PathMerger::CallbackService {
   Metrics& metrics() { return metrics_; }
 
   struct StoredHGraph;
+  class CallBase;
 
  private:
   class UnaryCall;
@@ -110,10 +123,11 @@ class PathMergerService final : public v1::PathMerger::CallbackService {
   // Counts the call as started (grpc_server_started_total) and returns its start time.
   std::chrono::steady_clock::time_point RecordStart(const std::string& method);
   void DropHGraphs(const std::vector<std::string>& names);
-  // The stored H-Graph `name` ("sessions/<id>/hgraphs/<n>", field "hgraph") for `tenant`: its
-  // session touched (NOT_FOUND / PERMISSION_DENIED as SessionRegistry::Touch), NOT_FOUND if the
-  // cache no longer holds it.
-  std::shared_ptr<StoredHGraph> HeldHGraph(const std::string& name, const std::string& tenant);
+  // The stored H-Graph `name` ("sessions/<id>/hgraphs/<hgraph id>", named `field` in errors)
+  // for `tenant`: its session touched (NOT_FOUND / PERMISSION_DENIED as SessionRegistry::Touch),
+  // NOT_FOUND (HGRAPH_NOT_FOUND) if the cache no longer holds it.
+  std::shared_ptr<StoredHGraph> HeldHGraph(const std::string& name, const std::string& tenant,
+                                           const std::string& field = "hgraph");
   // Counts a stored H-Graph that a query or an addition grew at its size now
   // (ResourceCache::Resize), so that the cache's budget bounds what the stored H-Graphs hold.
   // Returns whether the cache still holds it.
@@ -121,6 +135,10 @@ class PathMergerService final : public v1::PathMerger::CallbackService {
   void AddUpload(UploadCall* call);
   void RemoveUpload(UploadCall* call);
   void RecordMerge(const std::string& method, const v1::MergeResult& result);
+  // A merge whose client went away but that goes on (hgraph_id) registers its token, so that
+  // BeginShutdown can cancel it; false when the server is shutting down (the caller cancels it).
+  bool AddDurable(const CancelToken& token, uint64_t* id);
+  void RemoveDurable(uint64_t id);
 
   ServerOptions options_;
   Metrics& metrics_;
@@ -131,6 +149,10 @@ class PathMergerService final : public v1::PathMerger::CallbackService {
   WorkerPool pool_;
   std::mutex uploads_mutex_;
   std::set<UploadCall*> uploads_;  // unfinished UploadBlob streams
+  std::mutex durable_mutex_;
+  bool shutting_down_ = false;
+  uint64_t next_durable_ = 0;
+  std::map<uint64_t, CancelToken> durable_;  // merges that outlive their clients
 };
 
 }  // namespace hgraph::server

@@ -5,6 +5,7 @@
 #include "core/common/client_text.h"
 #include "core/common/digest.h"
 #include "core/common/error.h"
+#include "server/status/status.h"
 
 namespace hgraph::server {
 namespace {
@@ -19,6 +20,19 @@ google::protobuf::Timestamp ToTimestamp(SessionRegistry::Clock::time_point t) {
   ts.set_seconds(ns / 1'000'000'000);
   ts.set_nanos(static_cast<int32_t>(ns % 1'000'000'000));
   return ts;
+}
+
+// An H-Graph id (MergePathsRequest.hgraph_id): 1 to 63 lower-case letters, digits and '-',
+// starting with a letter or digit. The server's own are 32 hex digits.
+bool ValidHGraphId(const std::string& id) {
+  if (id.empty() || id.size() > 63 || id[0] == '-') return false;
+  return std::all_of(id.begin(), id.end(), [](char c) {
+    return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '-';
+  });
+}
+
+ServiceError SessionNotFound(const std::string& field, const std::string& message) {
+  return ServiceError(grpc::StatusCode::NOT_FOUND, "SESSION_NOT_FOUND", field, message);
 }
 
 }  // namespace
@@ -42,12 +56,10 @@ void SessionRegistry::ValidateName(const std::string& name, const std::string& f
 
 std::string SessionRegistry::SessionOfHGraph(const std::string& hgraph, const std::string& field) {
   const size_t at = hgraph.find(kHGraphs);
-  const bool ok = at == kPrefix.size() + 32 && at + kHGraphs.size() < hgraph.size() &&
-                  std::all_of(hgraph.begin() + static_cast<long>(at + kHGraphs.size()),
-                              hgraph.end(), [](char c) { return c >= '0' && c <= '9'; });
+  const bool ok = at == kPrefix.size() + 32 && ValidHGraphId(hgraph.substr(at + kHGraphs.size()));
   if (!ok) {
-    throw InputError(field,
-                     "must be \"sessions/<id>/hgraphs/<n>\", got \"" + ClientText(hgraph) + "\"");
+    throw InputError(
+        field, "must be \"sessions/<id>/hgraphs/<hgraph id>\", got \"" + ClientText(hgraph) + "\"");
   }
   std::string session = hgraph.substr(0, at);
   ValidateName(session, field);
@@ -111,21 +123,27 @@ v1::Session SessionRegistry::Touch(const std::string& name, const std::string& f
   auto it = sessions_.find(name);
   const Clock::time_point now = Clock::now();
   if (it == sessions_.end() || it->second.expire_time <= now) {
-    throw Error(ErrorCode::kNotFound, field,
-                "session " + name +
-                    " does not exist on this server (expired, deleted, or "
-                    "created on another replica)");
+    throw SessionNotFound(field, "session " + name +
+                                     " does not exist on this server (expired, deleted, or "
+                                     "created on another replica)");
   }
   CheckOwner(name, it->second, field, tenant);
   it->second.expire_time = now + ttl_;
   return ToProto(name, it->second);
 }
 
-std::vector<v1::Session> SessionRegistry::List(const std::string& tenant) const {
+std::vector<v1::Session> SessionRegistry::List(const std::string& tenant, const std::string& after,
+                                               size_t page_size, bool* more) const {
   std::lock_guard lock(mutex_);
   std::vector<v1::Session> out;
-  for (const auto& [name, record] : sessions_) {
-    if (record.tenant == tenant) out.push_back(ToProto(name, record));
+  if (more != nullptr) *more = false;
+  for (auto it = sessions_.upper_bound(after); it != sessions_.end(); ++it) {
+    if (it->second.tenant != tenant) continue;
+    if (out.size() == page_size) {
+      if (more != nullptr) *more = true;
+      break;
+    }
+    out.push_back(ToProto(it->first, it->second));
   }
   return out;
 }
@@ -136,7 +154,7 @@ std::vector<std::string> SessionRegistry::Delete(const std::string& name, const 
   std::lock_guard lock(mutex_);
   auto it = sessions_.find(name);
   if (it == sessions_.end()) {
-    throw Error(ErrorCode::kNotFound, field, "session " + name + " does not exist");
+    throw SessionNotFound(field, "session " + name + " does not exist");
   }
   CheckOwner(name, it->second, field, tenant);
   std::vector<std::string> hgraphs = std::move(it->second.hgraphs);
@@ -144,25 +162,110 @@ std::vector<std::string> SessionRegistry::Delete(const std::string& name, const 
   return hgraphs;
 }
 
-std::string SessionRegistry::AddHGraph(const std::string& session) {
+SessionRegistry::Record* SessionRegistry::RecordOf(const std::string& hgraph) {
+  const size_t at = hgraph.find(kHGraphs);
+  if (at == std::string::npos) return nullptr;
+  auto it = sessions_.find(hgraph.substr(0, at));
+  return it == sessions_.end() ? nullptr : &it->second;
+}
+
+const SessionRegistry::Record* SessionRegistry::RecordOf(const std::string& hgraph) const {
+  return const_cast<SessionRegistry*>(this)->RecordOf(hgraph);
+}
+
+std::string SessionRegistry::ReserveHGraph(const std::string& session, const std::string& hgraph_id,
+                                           const std::string& fingerprint,
+                                           const std::string& tenant, bool* repeat) {
+  *repeat = false;
+  if (!hgraph_id.empty() && !ValidHGraphId(hgraph_id)) {
+    throw InputError("hgraph_id",
+                     "must be 1 to 63 lower-case letters, digits and '-', starting with a letter "
+                     "or digit, got \"" +
+                         ClientText(hgraph_id) + "\"");
+  }
+  // The caller touched the session already; a merge that outlives the session's expiry (not
+  // yet swept) still reserves, as its KeepHGraph would still keep.
   std::lock_guard lock(mutex_);
   auto it = sessions_.find(session);
   if (it == sessions_.end()) {
-    throw Error(ErrorCode::kNotFound, "session", "session " + session + " was deleted meanwhile");
+    throw SessionNotFound("session", "session " + session + " was deleted meanwhile");
   }
-  std::string name = session + std::string(kHGraphs) + std::to_string(it->second.next_hgraph++);
-  it->second.hgraphs.push_back(name);
+  CheckOwner(session, it->second, "session", tenant);
+  Record& record = it->second;
+  if (hgraph_id.empty()) {
+    std::string name;
+    do {
+      name = session + std::string(kHGraphs) + RandomHex128();
+    } while (record.names.count(name) > 0);
+    record.names[name] =
+        Record::HGraphEntry{.state = HGraphState::kRunning, .fingerprint = fingerprint};
+    return name;
+  }
+  const std::string name = session + std::string(kHGraphs) + hgraph_id;
+  auto known = record.names.find(name);
+  if (known == record.names.end()) {
+    record.names[name] =
+        Record::HGraphEntry{.state = HGraphState::kRunning, .fingerprint = fingerprint};
+    return name;
+  }
+  switch (known->second.state) {
+    case HGraphState::kRunning:
+      throw ServiceError(
+          grpc::StatusCode::ABORTED, "MERGE_RUNNING", "hgraph_id",
+          "the merge of " + name + " is still running; retry later, or poll it with GetHGraph",
+          std::chrono::milliseconds(1000));
+    case HGraphState::kRetired:
+      throw ServiceError(grpc::StatusCode::NOT_FOUND, "HGRAPH_NOT_FOUND", "hgraph_id",
+                         name +
+                             " was evicted or deleted, and names are not given out twice; merge "
+                             "again under a new hgraph_id");
+    default: break;
+  }
+  if (known->second.fingerprint != fingerprint) {
+    throw ServiceError(grpc::StatusCode::ALREADY_EXISTS, "ALREADY_EXISTS", "hgraph_id",
+                       name + " already names an H-Graph merged from another request");
+  }
+  *repeat = true;
   return name;
 }
 
-void SessionRegistry::RemoveHGraph(const std::string& hgraph) {
-  const size_t at = hgraph.find(kHGraphs);
-  if (at == std::string::npos) return;
+void SessionRegistry::KeepHGraph(const std::string& hgraph) {
   std::lock_guard lock(mutex_);
-  auto it = sessions_.find(hgraph.substr(0, at));
-  if (it == sessions_.end()) return;
-  auto& list = it->second.hgraphs;
+  Record* record = RecordOf(hgraph);
+  if (record == nullptr || record->names.count(hgraph) == 0) {
+    throw Error(ErrorCode::kNotFound, "session",
+                "the session of " + hgraph + " was deleted meanwhile");
+  }
+  record->names[hgraph].state = HGraphState::kKept;
+  record->hgraphs.push_back(hgraph);
+}
+
+void SessionRegistry::AbandonHGraph(const std::string& hgraph) {
+  std::lock_guard lock(mutex_);
+  Record* record = RecordOf(hgraph);
+  if (record == nullptr) return;
+  auto it = record->names.find(hgraph);
+  if (it != record->names.end() && it->second.state == HGraphState::kRunning) {
+    record->names.erase(it);
+  }
+}
+
+void SessionRegistry::RemoveHGraph(const std::string& hgraph) {
+  std::lock_guard lock(mutex_);
+  Record* record = RecordOf(hgraph);
+  if (record == nullptr) return;
+  auto it = record->names.find(hgraph);
+  if (it != record->names.end()) it->second.state = HGraphState::kRetired;
+  auto& list = record->hgraphs;
   list.erase(std::remove(list.begin(), list.end(), hgraph), list.end());
+}
+
+SessionRegistry::HGraphState SessionRegistry::StateOf(const std::string& hgraph) const {
+  std::lock_guard lock(mutex_);
+  const Record* record = RecordOf(hgraph);
+  if (record == nullptr) return HGraphState::kUnknown;
+  auto it = record->names.find(hgraph);
+  return it == record->names.end() ? HGraphState::kUnknown : it->second.state;
 }
 
 std::vector<std::string> SessionRegistry::ExpireIdle(Clock::time_point now) {

@@ -11,6 +11,7 @@
 #pragma once
 
 #include <chrono>
+#include <cstdint>
 #include <map>
 #include <mutex>
 #include <string>
@@ -40,17 +41,39 @@ class SessionRegistry {
   // for a malformed name, Error(kNotFound, field) for an unknown or expired one and
   // Error(kPermissionDenied, field) for one of another tenant.
   v1::Session Touch(const std::string& name, const std::string& field, const std::string& tenant);
-  // The tenant's sessions only.
-  std::vector<v1::Session> List(const std::string& tenant) const;
+  // The tenant's sessions only, in name order: at most `page_size` of those after the session
+  // `after` (a name; empty: from the first). `more` tells whether any come after the last one.
+  std::vector<v1::Session> List(const std::string& tenant, const std::string& after = "",
+                                size_t page_size = SIZE_MAX, bool* more = nullptr) const;
   // Removes the session and returns the names of its H-Graphs (for the caller to drop). The
   // same errors as Touch.
   std::vector<std::string> Delete(const std::string& name, const std::string& field,
                                   const std::string& tenant);
 
-  // A fresh H-Graph name in the session ("sessions/<id>/hgraphs/<n>"), recorded in it.
-  std::string AddHGraph(const std::string& session);
-  // Forgets an H-Graph name (after eviction); unknown names are ignored.
+  // What a session knows of one of its H-Graph names. Names are never given out twice in a
+  // session: an evicted or deleted H-Graph's name stays retired while the session lives.
+  enum class HGraphState { kUnknown, kRunning, kKept, kRetired };
+
+  // Reserves the H-Graph name "sessions/<id>/hgraphs/<hgraph_id>" for a merge that starts now
+  // (`hgraph_id` empty: 32 random hex digits; else InputError("hgraph_id") unless 1 to 63
+  // lower-case letters, digits and '-', starting with a letter or digit), recording
+  // `fingerprint`, the request's. A name already known: ServiceError ABORTED MERGE_RUNNING
+  // while its merge runs, ALREADY_EXISTS for another fingerprint, NOT_FOUND HGRAPH_NOT_FOUND once
+  // retired; a kept one with the same fingerprint is returned with `*repeat` true (the caller
+  // answers what the first merge did). The session must exist (NOT_FOUND) and be the tenant's
+  // (PERMISSION_DENIED); the caller has touched it.
+  std::string ReserveHGraph(const std::string& session, const std::string& hgraph_id,
+                            const std::string& fingerprint, const std::string& tenant,
+                            bool* repeat);
+  // The reserved name's merge finished and its H-Graph is kept: listed in the session from now
+  // on. Throws Error(kNotFound, "session") when the session was deleted meanwhile.
+  void KeepHGraph(const std::string& hgraph);
+  // Forgets a reserved name whose merge failed (a retry may run it again); unknown names are
+  // ignored.
+  void AbandonHGraph(const std::string& hgraph);
+  // Retires a kept H-Graph name (after eviction or deletion); unknown names are ignored.
   void RemoveHGraph(const std::string& hgraph);
+  HGraphState StateOf(const std::string& hgraph) const;
 
   // Removes sessions idle past their expiry; returns the names of their H-Graphs.
   std::vector<std::string> ExpireIdle(Clock::time_point now);
@@ -65,9 +88,16 @@ class SessionRegistry {
     v1::Digest scene;
     Clock::time_point create_time;
     Clock::time_point expire_time;
-    std::vector<std::string> hgraphs;
-    int next_hgraph = 1;
+    std::vector<std::string> hgraphs;  // kept, in the order their merges finished
+    struct HGraphEntry {
+      HGraphState state = HGraphState::kRunning;
+      std::string fingerprint;
+    };
+    std::map<std::string, HGraphEntry> names;  // every H-Graph name given out
   };
+  // The record of the session an H-Graph name belongs to, or nullptr. Under mutex_.
+  Record* RecordOf(const std::string& hgraph);
+  const Record* RecordOf(const std::string& hgraph) const;
   v1::Session ToProto(const std::string& name, const Record& record) const;
   static void ValidateName(const std::string& name, const std::string& field);
   static void CheckOwner(const std::string& name, const Record& record, const std::string& field,

@@ -2,6 +2,7 @@
 // on a gRPC thread when it only looks up state, and on the worker pool when it does CPU work.
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <functional>
 #include <mutex>
 #include <string>
@@ -18,53 +19,27 @@
 
 namespace hgraph::server {
 
-// A unary call: optionally runs its body on the worker pool, then finishes with the mapped
-// status. Deletes itself when gRPC is done with it.
-class PathMergerService::UnaryCall final : public grpc::ServerUnaryReactor {
+// A unary call: runs its body here or on the worker pool, then finishes with the mapped status.
+// Deletes itself when gRPC is done with it.
+class PathMergerService::UnaryCall final : public grpc::ServerUnaryReactor, public CallBase {
  public:
   UnaryCall(PathMergerService* service, grpc::CallbackServerContext* context, std::string method,
             std::string session)
-      : service_(service), method_(std::move(method)), session_(std::move(session)) {
-    WireDeadline(context, token_);
-    auth_ = service->options().auth.Authenticate(*context, &tenant_);
-  }
-
-  // The caller's tenant (server/auth.h), for the session registry.
-  const std::string& tenant() const { return tenant_; }
+      : CallBase(service, context, std::move(method), std::move(session)) {}
 
   // `body` may throw hgraph::Error; it must not touch the call after returning. An
   // unauthenticated call finishes with UNAUTHENTICATED and runs no body.
   void Run(std::function<void(const CancelToken&)> body, bool on_worker) {
-    if (!auth_.ok()) return Complete(auth_);
-    if (!on_worker) {
-      Complete(Invoke([&] { body(token_); }, token_));
-      return;
-    }
-    const bool admitted =
-        service_->pool().TrySubmit([this, body = std::move(body)](WorkerPool::Slot& slot) {
-          const grpc::Status status = Invoke([&] { body(token_); }, token_);
-          slot.Release();
-          Complete(status);
-        });
-    if (!admitted) Complete(Busy(service_->pool()));
+    if (!Authenticated()) return;
+    if (!on_worker) return RunHere([&] { body(token_); });
+    Submit([this, body = std::move(body)] { body(token_); });
   }
 
   void OnCancel() override { token_.Cancel(); }
   void OnDone() override { delete this; }
 
  private:
-  void Complete(const grpc::Status& status) {
-    service_->RecordCall(method_, session_, started_, status);
-    Finish(status);
-  }
-
-  PathMergerService* service_;
-  std::string method_;
-  std::string session_;
-  Clock::time_point started_ = service_->RecordStart(method_);
-  CancelToken token_;
-  grpc::Status auth_;
-  std::string tenant_;
+  void Complete(const grpc::Status& status) override { Finish(Final(status)); }
 };
 
 grpc::ServerUnaryReactor* PathMergerService::FindMissingBlobs(
@@ -126,13 +101,32 @@ grpc::ServerUnaryReactor* PathMergerService::GetSession(grpc::CallbackServerCont
 }
 
 grpc::ServerUnaryReactor* PathMergerService::ListSessions(grpc::CallbackServerContext* context,
-                                                          const v1::ListSessionsRequest*,
+                                                          const v1::ListSessionsRequest* request,
                                                           v1::ListSessionsResponse* response) {
   auto* call = new UnaryCall(this, context, "ListSessions", "");
   call->Run(
       [=, this](const CancelToken&) {
-        for (v1::Session& s : sessions_.List(call->tenant()))
+        constexpr int kMaxPageSize = 1000;
+        constexpr int kDefaultPageSize = 100;
+        if (request->page_size() < 0 || request->page_size() > kMaxPageSize) {
+          throw InputError("page_size", "must be in [0, " + std::to_string(kMaxPageSize) +
+                                            "] (0 = " + std::to_string(kDefaultPageSize) +
+                                            "), got " + std::to_string(request->page_size()));
+        }
+        // The token is the last session name of the previous page (the registry's order).
+        if (!request->page_token().empty() && request->page_token().rfind("sessions/", 0) != 0) {
+          throw InputError("page_token", "is not a token this server issued");
+        }
+        const size_t page_size =
+            static_cast<size_t>(request->page_size() > 0 ? request->page_size() : kDefaultPageSize);
+        bool more = false;
+        for (v1::Session& s :
+             sessions_.List(call->tenant(), request->page_token(), page_size, &more)) {
           *response->add_sessions() = std::move(s);
+        }
+        if (more) {
+          response->set_next_page_token(response->sessions(response->sessions_size() - 1).name());
+        }
       },
       /*on_worker=*/false);
   return call;
@@ -151,14 +145,14 @@ grpc::ServerUnaryReactor* PathMergerService::DeleteSession(grpc::CallbackServerC
 }
 
 std::shared_ptr<PathMergerService::StoredHGraph> PathMergerService::HeldHGraph(
-    const std::string& name, const std::string& tenant) {
-  sessions_.Touch(SessionRegistry::SessionOfHGraph(name, "hgraph"), "hgraph", tenant);
+    const std::string& name, const std::string& tenant, const std::string& field) {
+  sessions_.Touch(SessionRegistry::SessionOfHGraph(name, field), field, tenant);
   auto stored = cache_.Get<StoredHGraph>(CacheKind::kHGraph, name);
   if (!stored) {
-    throw Error(ErrorCode::kNotFound, "hgraph",
-                ClientText(name) +
-                    " is not held by this server (evicted under the memory budget, or never "
-                    "built here); merge the paths again");
+    throw ServiceError(grpc::StatusCode::NOT_FOUND, "HGRAPH_NOT_FOUND", field,
+                       ClientText(name) +
+                           " is not held by this server (evicted under the memory budget, "
+                           "deleted, or never built here); merge the paths again");
   }
   return stored;
 }
@@ -186,6 +180,11 @@ grpc::ServerUnaryReactor* PathMergerService::Requery(grpc::CallbackServerContext
         const MergeResult result =
             QueryStored(*stored, measure, {}, token, ReportClearance(*request));
         *response->mutable_result() = MergeResultToProto(result);
+        EchoEvaluation(stored->options, response->mutable_result());
+        {
+          std::lock_guard lock(stored->mutex);
+          response->set_generation(stored->generation);
+        }
         if (Reaccount(request->hgraph(), *stored)) response->set_hgraph(request->hgraph());
         RecordMerge("Requery", response->result());
       },
@@ -201,37 +200,128 @@ grpc::ServerUnaryReactor* PathMergerService::AddPaths(grpc::CallbackServerContex
       [=, this](const CancelToken& token) {
         const auto stored = HeldHGraph(request->hgraph(), call->tenant());
         CheckBatchLimits(request->paths(), options_);
+        if (request->request_id().size() > 63 ||
+            std::any_of(request->request_id().begin(), request->request_id().end(),
+                        [](char c) { return c < '!' || c > '~'; })) {
+          throw InputError("request_id", "must be at most 63 printable ASCII characters");
+        }
         const MeasureSpec measure = MeasureFromProto(request->measure());
+        // One addition at a time from the look-up of its request id to its answer's record, so
+        // that a repeat that comes while the first runs waits for its answer.
+        std::lock_guard requests(stored->requests_mutex);
+        const std::string fingerprint = RequestFingerprint(*request);
+        if (!request->request_id().empty()) {
+          for (const auto& [id, first] : stored->requests) {
+            if (id != request->request_id()) continue;
+            if (first.first != fingerprint) {
+              throw ServiceError(grpc::StatusCode::ALREADY_EXISTS, "ALREADY_EXISTS", "request_id",
+                                 "request_id " + ClientText(id) +
+                                     " was used by another AddPaths request on " +
+                                     ClientText(request->hgraph()));
+            }
+            *response = first.second;
+            return;
+          }
+        }
         int held = 0;
+        int64_t generation = 0;
         {
           std::lock_guard lock(stored->mutex);
           held = stored->session->graph().num_paths();
+          generation = stored->generation;
         }
-        if (held + request->paths().paths_size() > options_.max_paths) {
-          throw Error(ErrorCode::kResourceExhausted, "paths.paths",
-                      std::to_string(request->paths().paths_size()) + " more paths would give " +
-                          ClientText(request->hgraph()) + " " +
-                          std::to_string(held + request->paths().paths_size()) +
-                          " inputs, over the limit of " + std::to_string(options_.max_paths) +
-                          " (--max-paths)");
+        if (request->has_expected_generation() && request->expected_generation() != generation) {
+          throw ServiceError(
+              grpc::StatusCode::ABORTED, "GENERATION_MISMATCH", "expected_generation",
+              ClientText(request->hgraph()) + " is at generation " + std::to_string(generation) +
+                  ", not " + std::to_string(request->expected_generation()) +
+                  "; nothing was added");
         }
+        CheckPathCount(held + request->paths().paths_size(), "paths.paths",
+                       "inputs (" + std::to_string(held) + " held in " +
+                           ClientText(request->hgraph()) + " and " +
+                           std::to_string(request->paths().paths_size()) + " more)",
+                       options_);
         const std::vector<InputPath> paths = PathsFromProto(request->paths());
         int64_t added = 0;
         MergeResult result;
-        try {
+        WithRequestPaths([&] {
           result = AddToStored(*stored, paths, measure, token, &added, ReportClearance(*request));
-        } catch (const Error& e) {
-          // The engine names the batch's own paths ("paths[i]..."), the request nests them.
-          if (e.field() != "paths" && e.field().rfind("paths[", 0) != 0) throw;
-          throw Error(e.code(), "paths." + e.field(),
-                      std::string(e.what()).substr(e.field().size() + 2));
+        });
+        {
+          std::lock_guard lock(stored->mutex);
+          generation = ++stored->generation;
+          for (const InputPath& path : paths) stored->input_names.push_back(path.name);
         }
         *response->mutable_result() = MergeResultToProto(result);
+        EchoEvaluation(stored->options, response->mutable_result());
         if (Reaccount(request->hgraph(), *stored)) response->set_hgraph(request->hgraph());
         response->set_candidates_added(added);
+        response->set_generation(generation);
         RecordMerge("AddPaths", response->result());
+        if (!request->request_id().empty()) {
+          stored->requests.emplace_back(request->request_id(),
+                                        std::make_pair(fingerprint, *response));
+          if (stored->requests.size() > StoredHGraph::kMaxRequestIds) stored->requests.pop_front();
+        }
       },
       /*on_worker=*/true);
+  return call;
+}
+
+grpc::ServerUnaryReactor* PathMergerService::GetHGraph(grpc::CallbackServerContext* context,
+                                                       const v1::GetHGraphRequest* request,
+                                                       v1::HGraph* response) {
+  auto* call = new UnaryCall(this, context, "GetHGraph", request->name());
+  call->Run(
+      [=, this](const CancelToken&) {
+        const std::string session = SessionRegistry::SessionOfHGraph(request->name(), "name");
+        sessions_.Touch(session, "name", call->tenant());
+        if (sessions_.StateOf(request->name()) == SessionRegistry::HGraphState::kRunning) {
+          response->set_name(request->name());
+          response->set_state(v1::HGraph::STATE_RUNNING);
+          return;
+        }
+        const auto stored = HeldHGraph(request->name(), call->tenant(), "name");
+        response->set_name(request->name());
+        response->set_state(v1::HGraph::STATE_READY);
+        *response->mutable_measure() = stored->measure;
+        *response->mutable_options() = stored->options;
+        *response->mutable_result() = stored->answer.result();
+        std::lock_guard lock(stored->mutex);
+        response->set_generation(stored->generation);
+        for (const std::string& name : stored->input_names) response->add_inputs(name);
+        response->set_nodes(stored->session->graph().num_nodes());
+        response->set_edges(stored->session->graph().num_edges());
+        response->set_memory_bytes(static_cast<int64_t>(stored->session->memory_bytes()));
+      },
+      /*on_worker=*/false);
+  return call;
+}
+
+grpc::ServerUnaryReactor* PathMergerService::DeleteHGraph(grpc::CallbackServerContext* context,
+                                                          const v1::DeleteHGraphRequest* request,
+                                                          v1::DeleteHGraphResponse*) {
+  auto* call = new UnaryCall(this, context, "DeleteHGraph", request->name());
+  call->Run(
+      [=, this](const CancelToken&) {
+        const std::string session = SessionRegistry::SessionOfHGraph(request->name(), "name");
+        sessions_.Touch(session, "name", call->tenant());
+        switch (sessions_.StateOf(request->name())) {
+          case SessionRegistry::HGraphState::kRunning:
+            throw ServiceError(grpc::StatusCode::ABORTED, "MERGE_RUNNING", "name",
+                               ClientText(request->name()) +
+                                   " is still being merged; delete it once its merge is done",
+                               std::chrono::milliseconds(1000));
+          case SessionRegistry::HGraphState::kKept: break;
+          default:
+            throw ServiceError(grpc::StatusCode::NOT_FOUND, "HGRAPH_NOT_FOUND", "name",
+                               ClientText(request->name()) + " is not held by this server");
+        }
+        sessions_.RemoveHGraph(request->name());
+        cache_.Erase(CacheKind::kHGraph, request->name());
+      },
+      /*on_worker=*/false);
   return call;
 }
 

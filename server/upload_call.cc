@@ -17,21 +17,16 @@ namespace hgraph::server {
 
 // Collects the chunks on gRPC threads (copies only), then verifies the size and SHA-256 on the
 // worker pool.
-class PathMergerService::UploadCall final : public grpc::ServerReadReactor<v1::UploadBlobRequest> {
+class PathMergerService::UploadCall final : public grpc::ServerReadReactor<v1::UploadBlobRequest>,
+                                            public CallBase {
  public:
   UploadCall(PathMergerService* service, grpc::CallbackServerContext* context,
              v1::UploadBlobResponse* response)
-      : service_(service), response_(response) {
-    // Blobs are shared by digest, so the tenant is not kept; an unauthenticated stream is not read.
-    std::string tenant;
-    if (grpc::Status auth = service->options().auth.Authenticate(*context, &tenant); !auth.ok()) {
-      Complete(auth);
-      return;
-    }
-    if (!service_->pool().TryHold()) {
-      Complete(Busy(service_->pool()));
-      return;
-    }
+      // No deadline on the token: an upload's only work is its verification.
+      : CallBase(service, context, "UploadBlob", "", /*wire_deadline=*/false), response_(response) {
+    // Blobs are shared by digest, so the tenant is not used; an unauthenticated stream is not
+    // read.
+    if (!Authenticated() || !Hold()) return;
     holds_slot_ = true;
     service_->AddUpload(this);
     registered_ = true;
@@ -49,29 +44,33 @@ class PathMergerService::UploadCall final : public grpc::ServerReadReactor<v1::U
       grpc::Status status = Invoke([&] { ValidateDigest(digest_, "digest"); }, token_);
       if (!status.ok()) return CompleteLocked(status);
       if (digest_.size_bytes() > service_->options().max_blob_bytes) {
-        return CompleteLocked(grpc::Status(
+        return CompleteLocked(DetailedStatus(
             grpc::StatusCode::RESOURCE_EXHAUSTED,
             "digest.size_bytes: " + std::to_string(digest_.size_bytes()) +
                 " bytes exceed the limit of " + std::to_string(service_->options().max_blob_bytes) +
-                " (--max-blob-bytes)"));
+                " (--max-blob-bytes)",
+            "digest.size_bytes", "LIMIT_EXCEEDED"));
       }
       const size_t declared = static_cast<size_t>(digest_.size_bytes());
       if (!service_->cache_.Reserve(declared)) {
-        return CompleteLocked(
-            grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
-                         "digest.size_bytes: " + std::to_string(declared) +
-                             " bytes do not fit in the server's cache budget now (--cache-bytes=" +
-                             std::to_string(service_->cache_.budget_bytes()) + ", of which " +
-                             std::to_string(service_->cache_.reserved_bytes()) +
-                             " are reserved by unfinished uploads); retry later"));
+        // Busy, not a limit: what unfinished uploads reserve is released as they end.
+        return CompleteLocked(DetailedStatus(
+            grpc::StatusCode::RESOURCE_EXHAUSTED,
+            "digest.size_bytes: " + std::to_string(declared) +
+                " bytes do not fit in the server's cache budget now (--cache-bytes=" +
+                std::to_string(service_->cache_.budget_bytes()) + ", of which " +
+                std::to_string(service_->cache_.reserved_bytes()) +
+                " are reserved by unfinished uploads); retry later",
+            "digest.size_bytes", "SERVER_BUSY", std::chrono::milliseconds(1000)));
       }
       reserved_ = declared;
       bytes_.reserve(declared);
     }
     if (static_cast<int64_t>(bytes_.size() + chunk_.data().size()) > digest_.size_bytes()) {
-      return CompleteLocked(grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
-                                         "data: the chunks hold more than digest.size_bytes = " +
-                                             std::to_string(digest_.size_bytes()) + " bytes"));
+      return CompleteLocked(DetailedStatus(grpc::StatusCode::INVALID_ARGUMENT,
+                                           "data: the chunks hold more than digest.size_bytes = " +
+                                               std::to_string(digest_.size_bytes()) + " bytes",
+                                           "data", "INVALID_ARGUMENT"));
     }
     bytes_ += chunk_.data();
     StartRead(&chunk_);
@@ -92,10 +91,11 @@ class PathMergerService::UploadCall final : public grpc::ServerReadReactor<v1::U
     return !working_.load() && Clock::time_point(Clock::duration(last_activity_.load())) < cutoff;
   }
   void Expire(std::chrono::milliseconds timeout) {
-    Complete(grpc::Status(grpc::StatusCode::ABORTED,
-                          "UploadBlob: no data for " + std::to_string(timeout.count() / 1000) +
-                              " s (--upload-idle-timeout-s); the upload was aborted and its " +
-                              "bytes released"));
+    Complete(DetailedStatus(grpc::StatusCode::ABORTED,
+                            "UploadBlob: no data for " + std::to_string(timeout.count() / 1000) +
+                                " s (--upload-idle-timeout-s); the upload was aborted and its " +
+                                "bytes released",
+                            "", "UPLOAD_IDLE"));
   }
 
  private:
@@ -104,26 +104,21 @@ class PathMergerService::UploadCall final : public grpc::ServerReadReactor<v1::U
   // Under mutex_.
   void EndOfStream() {
     if (first_) {
-      return CompleteLocked(
-          grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, "digest: the stream held no message"));
+      return CompleteLocked(DetailedStatus(grpc::StatusCode::INVALID_ARGUMENT,
+                                           "digest: the stream held no message", "digest",
+                                           "INVALID_ARGUMENT"));
     }
     working_.store(true);
     // The slot held since the start becomes the verification job's.
     holds_slot_ = false;
-    service_->pool().SubmitHeld([this](WorkerPool::Slot& slot) {
+    SubmitHeld([this] {
       {
         // From here on the blob counts against the budget as what it becomes, a cache entry.
         std::lock_guard lock(mutex_);
         ReleaseReservationLocked();
       }
-      const grpc::Status status = Invoke(
-          [&] {
-            response_->set_stored(service_->scenes_.PutBlob(digest_, std::move(bytes_)));
-            *response_->mutable_digest() = digest_;
-          },
-          token_);
-      slot.Release();
-      Complete(status);
+      response_->set_stored(service_->scenes_.PutBlob(digest_, std::move(bytes_)));
+      *response_->mutable_digest() = digest_;
     });
   }
 
@@ -136,7 +131,7 @@ class PathMergerService::UploadCall final : public grpc::ServerReadReactor<v1::U
     if (std::exchange(holds_slot_, false)) service_->pool().Unhold();
   }
 
-  void Complete(const grpc::Status& status) {
+  void Complete(const grpc::Status& status) override {
     std::lock_guard lock(mutex_);
     CompleteLocked(status);
   }
@@ -146,11 +141,9 @@ class PathMergerService::UploadCall final : public grpc::ServerReadReactor<v1::U
     finished_ = true;
     token_.Cancel();
     ReleaseHoldsLocked();
-    service_->RecordCall("UploadBlob", "", started_, status);
-    Finish(status);
+    Finish(Final(status));
   }
 
-  PathMergerService* service_;
   v1::UploadBlobResponse* response_;
   // Guards everything below but the atomics: reads, the verification job and the reaper run on
   // different threads.
@@ -165,8 +158,6 @@ class PathMergerService::UploadCall final : public grpc::ServerReadReactor<v1::U
   size_t reserved_ = 0;
   std::atomic<bool> working_{false};
   std::atomic<Clock::rep> last_activity_{Clock::now().time_since_epoch().count()};
-  Clock::time_point started_ = service_->RecordStart("UploadBlob");
-  CancelToken token_;
 };
 
 grpc::ServerReadReactor<v1::UploadBlobRequest>* PathMergerService::UploadBlob(

@@ -180,9 +180,12 @@ double ResolutionFromProto(const v1::MergeOptions& options, const v1::Scene& sce
 v1::PathQuality QualityToProto(const PathQuality& quality) {
   v1::PathQuality proto;
   proto.set_length(quality.length);
-  proto.set_min_clearance(quality.min_clearance);
-  proto.set_avg_clearance(quality.avg_clearance);
-  proto.set_inverse_clearance(quality.inverse_clearance);
+  // Unset where unknown (has_clearance false): a reader that checks presence sees no 0.
+  if (quality.has_clearance) {
+    proto.set_min_clearance(quality.min_clearance);
+    proto.set_avg_clearance(quality.avg_clearance);
+    proto.set_inverse_clearance(quality.inverse_clearance);
+  }
   proto.set_k(quality.k);
   proto.set_has_clearance(quality.has_clearance);
   return proto;
@@ -218,6 +221,15 @@ v1::InputReport InputReportToProto(const InputReport& report) {
   }
   proto.set_certified(report.certified);
   proto.set_checked(report.checked);
+  if (!report.valid) {
+    proto.set_validity(v1::VALIDITY_INVALID);
+    v1::PathFailure* failure = proto.mutable_failure();
+    failure->set_edge(report.invalid_edge);
+    failure->set_at(report.invalid_at);
+    failure->set_cause(proto.invalid_cause());
+  } else {
+    proto.set_validity(report.checked ? v1::VALIDITY_VALID : v1::VALIDITY_UNKNOWN);
+  }
   return proto;
 }
 
@@ -287,6 +299,20 @@ v1::MergeResult MergeResultToProto(const MergeResult& result) {
   proto.set_objective(result.objective);
   proto.set_best_input_objective(result.best_input_objective);
   proto.set_hgraph_objective(result.hgraph_objective);
+  for (size_t i = 0; i < result.source_path.size(); ++i) {
+    v1::WaypointSource* source = proto.add_sources();
+    if (result.source_path[i] < 0) continue;
+    source->set_input(result.source_path[i]);
+    if (i < result.source_index.size()) source->set_edge(result.source_index[i]);
+    if (i < result.source_fraction.size()) source->set_fraction(result.source_fraction[i]);
+  }
+  // Only an input known valid is the best one.
+  const int best = result.best_input;
+  if (best >= 0 && best < static_cast<int>(result.inputs.size()) && result.inputs[best].valid &&
+      result.inputs[best].checked) {
+    proto.mutable_best()->set_index(best);
+    proto.mutable_best()->set_objective(result.best_input_objective);
+  }
   return proto;
 }
 

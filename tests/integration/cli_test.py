@@ -135,8 +135,13 @@ def check_result(env, result, measure_key="length"):
     first, last = env.circle_paths()[0][0], env.circle_paths()[0][-1]
     expect(path[0]["values"] == first and path[-1]["values"] == last,
            "merged path does not keep the shared start and goal")
-    for key in ("length", "min_clearance", "avg_clearance", "inverse_clearance"):
-        expect(key in result["quality"], "quality has no %s" % key)
+    expect("length" in result["quality"], "quality has no length")
+    # The clearances are present exactly when known (PathQuality.has_clearance).
+    known = result["quality"].get("has_clearance", False)
+    for key in ("min_clearance", "avg_clearance", "inverse_clearance"):
+        expect((key in result["quality"]) == known,
+               "quality %s %s although has_clearance is %s" %
+               ("has" if key in result["quality"] else "lacks", key, known))
     for key in ("stats", "timing", "source_path", "source_index"):
         expect(key in result, "result has no %s" % key)
     return path

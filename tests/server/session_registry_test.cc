@@ -8,6 +8,7 @@
 
 #include "core/common/error.h"
 #include "server/auth.h"
+#include "server/status/status.h"
 
 namespace hgraph::server {
 namespace {
@@ -62,13 +63,24 @@ TEST(SessionRegistry, RandomIdsAreDistinctAndTheLimitHolds) {
             ErrorCode::kResourceExhausted);
 }
 
+// A merge's H-Graph name, reserved at its start and kept at its end.
+std::string AddHGraph(SessionRegistry& registry, const std::string& session,
+                      const std::string& id = "", const std::string& fingerprint = "f") {
+  bool repeat = false;
+  const std::string name = registry.ReserveHGraph(session, id, fingerprint, kAnonymous, &repeat);
+  if (!repeat) registry.KeepHGraph(name);
+  return name;
+}
+
 TEST(SessionRegistry, HGraphsAreNamedInTheirSessionAndReturnedOnDelete) {
   SessionRegistry registry(10, 1h);
   const std::string session = registry.Create(Scene('a'), kId, kAnonymous).name();
-  const std::string first = registry.AddHGraph(session);
-  const std::string second = registry.AddHGraph(session);
-  EXPECT_EQ(first, session + "/hgraphs/1");
-  EXPECT_EQ(second, session + "/hgraphs/2");
+  const std::string first = AddHGraph(registry, session);
+  const std::string second = AddHGraph(registry, session);
+  // Random ids: 32 hex digits, distinct.
+  EXPECT_EQ(first.rfind(session + "/hgraphs/", 0), 0u);
+  EXPECT_EQ(first.size(), session.size() + 9 + 32);
+  EXPECT_NE(first, second);
   EXPECT_EQ(SessionRegistry::SessionOfHGraph(second, "hgraph"), session);
   registry.RemoveHGraph(first);
   EXPECT_EQ(registry.Touch(session, "name", kAnonymous).hgraphs_size(), 1);
@@ -78,7 +90,73 @@ TEST(SessionRegistry, HGraphsAreNamedInTheirSessionAndReturnedOnDelete) {
             ErrorCode::kNotFound);
   EXPECT_EQ(field, "name");
   // A merge that finishes after the delete finds no session to add its H-Graph to.
-  EXPECT_EQ(CodeOf([&] { registry.AddHGraph(session); }), ErrorCode::kNotFound);
+  EXPECT_EQ(CodeOf([&] { registry.KeepHGraph(second); }), ErrorCode::kNotFound);
+}
+
+TEST(SessionRegistry, ClientChosenHGraphIdsRepeatOnlyTheSameRequestAndAreNeverGivenOutTwice) {
+  SessionRegistry registry(10, 1h);
+  const std::string session = registry.Create(Scene('a'), kId, kAnonymous).name();
+  bool repeat = true;
+  const std::string name = registry.ReserveHGraph(session, "my-graph", "f1", kAnonymous, &repeat);
+  EXPECT_EQ(name, session + "/hgraphs/my-graph");
+  EXPECT_FALSE(repeat);
+  EXPECT_EQ(registry.StateOf(name), SessionRegistry::HGraphState::kRunning);
+  // While it runs: ABORTED (MERGE_RUNNING).
+  try {
+    registry.ReserveHGraph(session, "my-graph", "f1", kAnonymous, &repeat);
+    ADD_FAILURE() << "a repeat of a running merge was accepted";
+  } catch (const ServiceError& e) {
+    EXPECT_EQ(e.status(), grpc::StatusCode::ABORTED);
+    EXPECT_EQ(e.reason(), "MERGE_RUNNING");
+    EXPECT_GT(e.retry_delay().count(), 0);
+  }
+  registry.KeepHGraph(name);
+  EXPECT_EQ(registry.ReserveHGraph(session, "my-graph", "f1", kAnonymous, &repeat), name);
+  EXPECT_TRUE(repeat);
+  try {
+    registry.ReserveHGraph(session, "my-graph", "f2", kAnonymous, &repeat);
+    ADD_FAILURE() << "another request under a used id was accepted";
+  } catch (const ServiceError& e) {
+    EXPECT_EQ(e.status(), grpc::StatusCode::ALREADY_EXISTS);
+  }
+  // Evicted or deleted: the name stays retired.
+  registry.RemoveHGraph(name);
+  EXPECT_EQ(registry.StateOf(name), SessionRegistry::HGraphState::kRetired);
+  try {
+    registry.ReserveHGraph(session, "my-graph", "f1", kAnonymous, &repeat);
+    ADD_FAILURE() << "a retired name was given out again";
+  } catch (const ServiceError& e) {
+    EXPECT_EQ(e.status(), grpc::StatusCode::NOT_FOUND);
+    EXPECT_EQ(e.reason(), "HGRAPH_NOT_FOUND");
+  }
+  // A failed merge's name is forgotten: its retry runs.
+  const std::string failed = registry.ReserveHGraph(session, "again", "f", kAnonymous, &repeat);
+  registry.AbandonHGraph(failed);
+  EXPECT_EQ(registry.StateOf(failed), SessionRegistry::HGraphState::kUnknown);
+  EXPECT_EQ(registry.ReserveHGraph(session, "again", "f", kAnonymous, &repeat), failed);
+  EXPECT_FALSE(repeat);
+  std::string field;
+  EXPECT_EQ(
+      CodeOf([&] { registry.ReserveHGraph(session, "Bad_Id", "f", kAnonymous, &repeat); }, &field),
+      ErrorCode::kInvalidArgument);
+  EXPECT_EQ(field, "hgraph_id");
+}
+
+TEST(SessionRegistry, ListPagesInNameOrder) {
+  SessionRegistry registry(10, 1h);
+  for (char c : {'3', '1', '2'}) {
+    registry.Create(Scene('a'), std::string(32, c), kAnonymous);
+  }
+  bool more = false;
+  const auto first = registry.List(kAnonymous, "", 2, &more);
+  ASSERT_EQ(first.size(), 2u);
+  EXPECT_TRUE(more);
+  EXPECT_EQ(first[0].name(), "sessions/" + std::string(32, '1'));
+  EXPECT_EQ(first[1].name(), "sessions/" + std::string(32, '2'));
+  const auto second = registry.List(kAnonymous, first[1].name(), 2, &more);
+  ASSERT_EQ(second.size(), 1u);
+  EXPECT_FALSE(more);
+  EXPECT_EQ(second[0].name(), "sessions/" + std::string(32, '3'));
 }
 
 TEST(SessionRegistry, MalformedNamesAreInputErrorsNamingTheField) {
@@ -95,7 +173,7 @@ TEST(SessionRegistry, MalformedNamesAreInputErrorsNamingTheField) {
 TEST(SessionRegistry, IdleSessionsExpireWithTheirHGraphs) {
   SessionRegistry registry(10, 1h);
   const std::string session = registry.Create(Scene('a'), kId, kAnonymous).name();
-  const std::string hgraph = registry.AddHGraph(session);
+  const std::string hgraph = AddHGraph(registry, session);
   EXPECT_TRUE(registry.ExpireIdle(SessionRegistry::Clock::now() + 30min).empty());
   EXPECT_EQ(registry.size(), 1);
   EXPECT_EQ(registry.ExpireIdle(SessionRegistry::Clock::now() + 2h),

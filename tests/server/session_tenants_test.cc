@@ -82,7 +82,12 @@ TEST(SessionTenants, ListShowsOnlyTheCallersSessions) {
 TEST(SessionTenants, HGraphsAreReachedOnlyThroughTheirSession) {
   SessionRegistry registry(10, hours(1));
   const v1::Session a = registry.Create(SceneDigest('1'), kIdA, "team-a");
-  const std::string hgraph = registry.AddHGraph(a.name());
+  bool repeat = false;
+  const std::string hgraph = registry.ReserveHGraph(a.name(), "", "f", "team-a", &repeat);
+  registry.KeepHGraph(hgraph);
+  // Another tenant cannot merge into it.
+  EXPECT_EQ(CodeOf([&] { registry.ReserveHGraph(a.name(), "", "f", "team-b", &repeat); }),
+            ErrorCode::kPermissionDenied);
   const std::string session = SessionRegistry::SessionOfHGraph(hgraph, "hgraph");
   EXPECT_EQ(session, a.name());
   EXPECT_EQ(CodeOf([&] { registry.Touch(session, "hgraph", "team-b"); }),
@@ -95,7 +100,8 @@ TEST(SessionTenants, AnExpiredSessionNotYetSweptStaysItsOwners) {
   // must not take the name over in between.
   SessionRegistry registry(10, milliseconds(0));
   const v1::Session a = registry.Create(SceneDigest('1'), kIdA, "team-a");
-  registry.AddHGraph(a.name());
+  bool repeat = false;
+  registry.KeepHGraph(registry.ReserveHGraph(a.name(), "", "f", "team-a", &repeat));
   EXPECT_EQ(CodeOf([&] { registry.Create(SceneDigest('1'), kIdA, "team-b"); }),
             ErrorCode::kPermissionDenied);
   EXPECT_EQ(registry.ExpireIdle(SessionRegistry::Clock::now()).size(), 1u);

@@ -11,6 +11,7 @@ import pathlib
 import sys
 
 import hgraph_client
+from hgraph.v1 import merge_pb2
 
 ROOT = pathlib.Path(__file__).resolve().parents[3]
 
@@ -33,13 +34,16 @@ def main() -> int:
 
         merged = client.merge(paths, measure="length", variant="all-pairs", on_progress=show)
         r = merged.result
-        # best_input is -1 when no input was checked whole (a lazy merge checks only what its
-        # search needs): an index of -1 would silently name the last input.
-        best = (f"best input {r.inputs[r.best_input].quality.length:.3f}" if r.best_input >= 0
-                else "no input checked whole")
-        print(f"merged: length {r.quality.length:.3f} ({best}), "
+        # `best` is unset when no input is known valid (a lazy merge checks only what its search
+        # needs: the others say VALIDITY_UNKNOWN); never index inputs with best_input's -1.
+        best = (f"best input {r.inputs[r.best.index].name} {r.best.objective:.3f}"
+                if r.HasField("best") else "no input known valid")
+        unknown = sum(i.validity == merge_pb2.VALIDITY_UNKNOWN for i in r.inputs)
+        print(f"merged: length {r.quality.length:.3f} ({best}; {unknown} inputs unchecked, "
+              f"{merge_pb2.Evaluation.Name(r.evaluation)}), "
               f"{r.stats.collision_checks} collision checks, H-Graph {merged.hgraph}")
         again = client.requery(merged.hgraph, measure="bottleneck-clearance")
+        # A clearance measure always profiles the path: min_clearance is present.
         print(f"requery bottleneck-clearance: min clearance {again.quality.min_clearance:.3f}, "
               f"{again.stats.collision_checks} new collision checks, "
               f"{again.stats.edges_reused} edges reused")

@@ -14,11 +14,17 @@ Install: `/usr/bin/python3 -m pip install ./client/python` (the hgraph.v1 stubs 
 while it builds; README.md beside pyproject.toml). In a build tree, CMake also builds them into
 <build>/python: put that folder and this one on PYTHONPATH.
 
+A failed call raises HgraphError, whose `details` (`reason`, `field`, `retry_delay_s`) come
+from the google.rpc.Status the server attaches (decode_error_details reads them from any
+grpc.RpcError's trailing metadata).
+
 Every call carries the session's name in `x-hgraph-session` (session affinity behind a load
 balancer); merge, check and plan recover from a lost replica with retries and backoff (Client).
 """
 from hgraph_client.client import (CheckOutcome, Client, HgraphError, MergeOutcome, Progress,
                                   StopMerge, connect, load_paths_text, make_measure, make_paths)
+from hgraph_client.status import ErrorDetails, decode as decode_error_details
 
-__all__ = ["CheckOutcome", "Client", "HgraphError", "MergeOutcome", "Progress", "StopMerge",
-           "connect", "load_paths_text", "make_measure", "make_paths"]
+__all__ = ["CheckOutcome", "Client", "ErrorDetails", "HgraphError", "MergeOutcome", "Progress",
+           "StopMerge", "connect", "decode_error_details", "load_paths_text", "make_measure",
+           "make_paths"]

@@ -13,6 +13,7 @@ import grpc
 from google.protobuf import json_format
 
 from hgraph.v1 import merge_pb2, path_pb2, scene_pb2, service_pb2, service_pb2_grpc, space_pb2
+from hgraph_client import status as rich_status
 
 # Uploads are chunked well below gRPC's default 4 MiB message limit.
 CHUNK_BYTES = 1 << 20
@@ -26,8 +27,10 @@ TOKEN_ENV = "HGRAPH_TOKEN"
 PemSource = Union[str, pathlib.Path, bytes, None]
 
 # Codes after which a session call is worth repeating on a fresh session: the replica that held
-# the session is gone (UNAVAILABLE), or the call reached a replica that never saw it (NOT_FOUND).
+# the session is gone (UNAVAILABLE), or the call reached a replica that never saw it (NOT_FOUND
+# for the session, its scene or a blob: not for an H-Graph, which a new session does not have).
 RECOVERABLE = (grpc.StatusCode.UNAVAILABLE, grpc.StatusCode.NOT_FOUND)
+RECOVERABLE_REASONS = (None, "SESSION_NOT_FOUND", "SCENE_NOT_FOUND", "BLOB_NOT_FOUND")
 
 MEASURES = {
     "length": merge_pb2.Measure.TYPE_LENGTH,
@@ -51,12 +54,29 @@ EVALUATIONS = {
 
 
 class HgraphError(Exception):
-    """A failed call: the canonical gRPC code and the server's message (which names the field)."""
+    """A failed call: the canonical gRPC code, the server's message (which names the field) and
+    its error details (hgraph_client.status.ErrorDetails; None from an older server or from gRPC
+    itself): `reason` ("SESSION_NOT_FOUND", "SERVER_BUSY", ...), `field` (the offending field)
+    and `retry_delay_s` (set when the same call is worth retrying after that long)."""
 
-    def __init__(self, code: grpc.StatusCode, message: str):
+    def __init__(self, code: grpc.StatusCode, message: str,
+                 details: Optional[rich_status.ErrorDetails] = None):
         super().__init__(f"{code.name}: {message}")
         self.code = code
         self.message = message
+        self.details = details
+
+    @property
+    def reason(self) -> Optional[str]:
+        return self.details.reason if self.details else None
+
+    @property
+    def field(self) -> Optional[str]:
+        return (self.details.metadata or {}).get("field") if self.details else None
+
+    @property
+    def retry_delay_s(self) -> Optional[float]:
+        return self.details.retry_delay_s if self.details else None
 
 
 class StopMerge(Exception):
@@ -80,13 +100,16 @@ class Progress:
 @dataclasses.dataclass
 class MergeOutcome:
     result: merge_pb2.MergeResult
-    # "sessions/<id>/hgraphs/<n>": pass to Client.requery. Empty if the server could not keep it.
+    # "sessions/<id>/hgraphs/<hgraph id>": pass to Client.requery. Empty if the server could not
+    # keep it.
     hgraph: str
     progress_events: int
     # False when the call stopped early (best_so_far and the deadline, or StopMerge) and `result`
     # holds the best path streamed so far: its path, objective, measure and (when its event was
     # received) hgraph_objective only, no report; the path is certified all the same.
     complete: bool = True
+    # The H-Graph's generation (1 after a merge; AddPaths increments it); 0 when not kept.
+    generation: int = 0
 
 
 @dataclasses.dataclass
@@ -169,7 +192,8 @@ def _pem(source: PemSource, name: str) -> Optional[bytes]:
 
 
 def _raise(error: grpc.RpcError) -> None:
-    raise HgraphError(error.code(), error.details()) from None
+    trailing = error.trailing_metadata() if hasattr(error, "trailing_metadata") else None
+    raise HgraphError(error.code(), error.details(), rich_status.decode(trailing)) from None
 
 
 class Client:
@@ -241,7 +265,8 @@ class Client:
             try:
                 return call()
             except HgraphError as e:
-                if (e.code not in RECOVERABLE or attempt >= self.retries or
+                if (e.code not in RECOVERABLE or e.reason not in RECOVERABLE_REASONS or
+                        attempt >= self.retries or
                         explicit_session not in (None, self.session) or self._scene is None or
                         self.session is None):
                     raise
@@ -365,10 +390,34 @@ class Client:
         except grpc.RpcError as e:
             _raise(e)
 
-    def list_sessions(self) -> list:
+    def list_sessions(self, page_size: int = 0) -> list:
+        """This tenant's sessions on the replica that answers (every page of ListSessions)."""
+        out, token = [], ""
         try:
-            return list(self.stub.ListSessions(service_pb2.ListSessionsRequest(),
-                                               metadata=self._metadata()).sessions)
+            while True:
+                page = self.stub.ListSessions(
+                    service_pb2.ListSessionsRequest(page_size=page_size, page_token=token),
+                    metadata=self._metadata())
+                out.extend(page.sessions)
+                token = page.next_page_token
+                if not token:
+                    return out
+        except grpc.RpcError as e:
+            _raise(e)
+
+    def get_hgraph(self, name: str) -> service_pb2.HGraph:
+        """A kept H-Graph (GetHGraph): generation, inputs, size and the merge's result; state
+        RUNNING while a merge with an hgraph_id still builds it."""
+        try:
+            return self.stub.GetHGraph(service_pb2.GetHGraphRequest(name=name),
+                                       metadata=self._metadata(name.split("/hgraphs/", 1)[0]))
+        except grpc.RpcError as e:
+            _raise(e)
+
+    def delete_hgraph(self, name: str) -> None:
+        try:
+            self.stub.DeleteHGraph(service_pb2.DeleteHGraphRequest(name=name),
+                                   metadata=self._metadata(name.split("/hgraphs/", 1)[0]))
         except grpc.RpcError as e:
             _raise(e)
 
@@ -392,7 +441,7 @@ class Client:
               progress_paths: Optional[bool] = None, best_so_far: bool = False,
               session: Optional[str] = None,
               on_progress: Optional[Callable[[Progress], None]] = None,
-              progress_interval_ms: int = 0, seed: int = 0,
+              progress_interval_ms: int = 0, seed: int = 0, hgraph_id: str = "",
               timeout: Optional[float] = None) -> MergeOutcome:
         """Merges the paths in the session (default: the current one), streaming progress.
 
@@ -414,7 +463,11 @@ class Client:
         for the paths) makes a call whose `timeout` passes after the first of them return that
         best path (MergeOutcome.complete False) instead of raising DEADLINE_EXCEEDED. An
         on_progress callback may raise StopMerge to end the call at once: the merge then returns
-        the best path streamed so far, or raises HgraphError(CANCELLED) if none came yet."""
+        the best path streamed so far, or raises HgraphError(CANCELLED) if none came yet.
+
+        `hgraph_id` names the H-Graph ("sessions/<id>/hgraphs/<hgraph_id>"): a repeat of the same
+        call returns the first merge's result, and the merge finishes (and is kept) even if
+        this call ends first: get_hgraph(name) then returns its result."""
         return self._recovering(lambda: self._merge(
             paths, measure=measure, k=k, safety=safety, variant=variant, options=options,
             max_node_spacing=max_node_spacing, evaluation=evaluation,
@@ -422,12 +475,13 @@ class Client:
             optimize_ms=optimize_ms, restarts=restarts,
             partial_shortcuts=partial_shortcuts, progress_paths=progress_paths,
             best_so_far=best_so_far, session=session, on_progress=on_progress,
-            progress_interval_ms=progress_interval_ms, seed=seed, timeout=timeout), session)
+            progress_interval_ms=progress_interval_ms, seed=seed, hgraph_id=hgraph_id,
+            timeout=timeout), session)
 
     def _merge(self, paths, *, measure, k, safety, variant, options, max_node_spacing,
                evaluation, report_inputs, report_clearance, optimize_ms, restarts,
                partial_shortcuts, progress_paths, best_so_far, session, on_progress,
-               progress_interval_ms, seed, timeout) -> MergeOutcome:
+               progress_interval_ms, seed, hgraph_id, timeout) -> MergeOutcome:
         opts = merge_pb2.MergeOptions()
         if options is not None:
             opts.CopyFrom(options)
@@ -454,7 +508,7 @@ class Client:
         request = service_pb2.MergePathsRequest(
             session=session or self.session or "", paths=make_paths(paths),
             measure=make_measure(measure, k, safety), options=opts, seed=seed,
-            progress_interval_ms=progress_interval_ms)
+            progress_interval_ms=progress_interval_ms, hgraph_id=hgraph_id)
         events = 0
         # The best path streamed so far, as a result of its own (path, objectives, measure).
         best: Optional[merge_pb2.MergeResult] = None
@@ -478,7 +532,8 @@ class Client:
                         on_progress(Progress(p.phase, p.done, p.total, p.collision_checks,
                                              p.distance_queries, p.elapsed_ms, objective, path))
                 elif event.HasField("result"):
-                    return MergeOutcome(event.result, event.hgraph, events)
+                    return MergeOutcome(event.result, event.hgraph, events,
+                                        generation=event.generation)
         except StopMerge:
             call.cancel()
             if best is None:
@@ -517,15 +572,20 @@ class Client:
 
     def add_paths(self, hgraph: str, paths, measure: Union[str, merge_pb2.Measure] = "length", *,
                   k: Optional[float] = None, safety: Optional[float] = None,
-                  report_clearance: Optional[bool] = None,
+                  report_clearance: Optional[bool] = None, request_id: str = "",
+                  expected_generation: Optional[int] = None,
                   timeout: Optional[float] = None) -> service_pb2.AddPathsResponse:
         """Adds input paths to a stored H-Graph (edges checked before are kept), then searches
-        it under `measure` (AddPaths). The response carries the result, the H-Graph's name and
-        the bridge candidates the new paths brought; `report_clearance` as in `requery`."""
+        it under `measure` (AddPaths). The response carries the result, the H-Graph's name,
+        its new generation and the bridge candidates the new paths brought; `report_clearance`
+        as in `requery`. With a `request_id` a repeat returns the first answer and adds
+        nothing; with `expected_generation` the call adds only to that generation (ABORTED,
+        reason GENERATION_MISMATCH, otherwise)."""
         try:
             return self.stub.AddPaths(service_pb2.AddPathsRequest(
                 hgraph=hgraph, paths=make_paths(paths), measure=make_measure(measure, k, safety),
-                report_clearance=report_clearance),
+                report_clearance=report_clearance, request_id=request_id,
+                expected_generation=expected_generation),
                 timeout=timeout, metadata=self._metadata(hgraph.split("/hgraphs/", 1)[0]))
         except grpc.RpcError as e:
             _raise(e)
