@@ -123,8 +123,16 @@ double NewNodeReach(const HGraph& graph, const Space& space, double radius) {
   return radius > 0 ? radius : 2 * MeanInputEdgeLength(graph, space);
 }
 
+CandidateOptions Resolved(const CandidateOptions& options, const CandidateSet& set) {
+  CandidateOptions out = options;
+  out.radius = set.radius;
+  out.gap_init = set.gap_init;
+  out.gap_extend = set.gap_extend;
+  return out;
+}
+
 CandidateSet BridgeCandidates(const HGraph& graph, const Space& space,
-                              const CandidateOptions& options) {
+                              const CandidateOptions& options, CandidatesSince since) {
   ValidateCandidateOptions(options);
   CandidateSet set;
   const double scale = MeanInputEdgeLength(graph, space);
@@ -136,12 +144,12 @@ CandidateSet BridgeCandidates(const HGraph& graph, const Space& space,
   switch (options.variant) {
     case Variant::kAllPairs:
       for (int u = 0; u < n; ++u) {
-        for (int v = u + 1; v < n; ++v) out.Add(u, v);
+        for (int v = std::max(u + 1, since.nodes); v < n; ++v) out.Add(u, v);
       }
       break;
     case Variant::kNeighborhood:
       for (int u = 0; u < n; ++u) {
-        for (int v = u + 1; v < n; ++v) {
+        for (int v = std::max(u + 1, since.nodes); v < n; ++v) {
           if (space.Distance(graph.node(u).q, graph.node(v).q) <= set.radius) out.Add(u, v);
         }
       }
@@ -155,7 +163,9 @@ CandidateSet BridgeCandidates(const HGraph& graph, const Space& space,
         }
         const int keep = std::min<int>(options.phi, static_cast<int>(near.size()));
         std::partial_sort(near.begin(), near.begin() + keep, near.end());
-        for (int k = 0; k < keep; ++k) out.Add(u, near[k].second);
+        for (int k = 0; k < keep; ++k) {
+          if (u >= since.nodes || near[k].second >= since.nodes) out.Add(u, near[k].second);
+        }
       }
       break;
     }
@@ -164,7 +174,7 @@ CandidateSet BridgeCandidates(const HGraph& graph, const Space& space,
       const double radius =
           options.variant == Variant::kEditDistanceNeighborhood ? set.radius : 0.0;
       for (int a = 0; a < graph.num_paths(); ++a) {
-        for (int b = a + 1; b < graph.num_paths(); ++b) {
+        for (int b = std::max(a + 1, since.paths); b < graph.num_paths(); ++b) {
           AddAlignmentBridges(graph, space, a, b, set.gap_init, set.gap_extend, radius, out);
           ++set.alignments;
         }

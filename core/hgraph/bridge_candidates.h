@@ -47,8 +47,19 @@ struct CandidateSet {
   double gap_extend = 0;
   int alignments = 0;  // pairs of paths aligned (edit-distance variants)
 };
+// With `since` (AddPaths: the nodes and paths the H-Graph held before), only the pairs that
+// involve a node or path added since, with the parameters given (pass the build's resolved ones,
+// CandidateSet's, so that they do not drift with the new inputs): the candidates merging every
+// input at once would hold beyond those already in the H-Graph (for k-nearest, a superset: the
+// pairs of old nodes that new ones push out of the k nearest stay).
+struct CandidatesSince {
+  int nodes = 0;
+  int paths = 0;
+};
 CandidateSet BridgeCandidates(const HGraph& graph, const Space& space,
-                              const CandidateOptions& options);
+                              const CandidateOptions& options, CandidatesSince since = {});
+// The options with the parameters `set` resolved (radius, gaps) made explicit.
+CandidateOptions Resolved(const CandidateOptions& options, const CandidateSet& set);
 
 // Mean length of the edges between the inputs' waypoints (the scale of the automatic
 // parameters).

@@ -204,6 +204,7 @@ HybridizationSession::HybridizationSession(const ClearanceChecker& checker,
   build_stats_.radius = candidates.radius;
   build_stats_.gap_init = candidates.gap_init;
   build_stats_.gap_extend = candidates.gap_extend;
+  candidates_ = Resolved(options_.candidates, candidates);
   std::vector<int> bridge_edges;
   bridge_edges.reserve(candidates.pairs.size());
   for (const auto& [u, v] : candidates.pairs) bridge_edges.push_back(graph_.AddEdge(u, v, false));
@@ -234,27 +235,22 @@ int64_t HybridizationSession::AddPaths(const std::vector<InputPath>& paths,
   // Validate every path before the H-Graph changes.
   graph_.CheckNewPaths(space, paths, options_.endpoint_tolerance, options_.max_node_spacing,
                        "paths");
-  const double reach = options_.candidates.variant == Variant::kAllPairs
-                           ? std::numeric_limits<double>::infinity()
-                           : NewNodeReach(graph_, space, build_stats_.radius);
+  const CandidatesSince since{.nodes = graph_.num_nodes(), .paths = graph_.num_paths()};
   const int first_edge = graph_.num_edges();
   std::vector<int> input_edges;
-  std::vector<int> bridges;
   for (size_t i = 0; i < paths.size(); ++i) {
-    const int before = graph_.num_nodes();
     const int p = graph_.AddPath(space, paths[i], options_.endpoint_tolerance,
                                  options_.max_node_spacing, "paths[" + std::to_string(i) + "]");
     for (int e : graph_.path_edges(p)) {
       if (e >= first_edge) input_edges.push_back(e);
     }
-    for (int u = before; u < graph_.num_nodes(); ++u) {
-      for (int v = 0; v < u; ++v) {
-        if (space.Distance(graph_.node(u).q, graph_.node(v).q) > reach) continue;
-        const int e = graph_.AddEdge(u, v, false);
-        if (e >= first_edge && !graph_.edge(e).input) bridges.push_back(e);
-      }
-    }
   }
+  // The bridges merging every input at once would add (the build's parameters, every variant).
+  const CandidateSet candidates = BridgeCandidates(graph_, space, candidates_, since);
+  std::vector<int> bridges;
+  bridges.reserve(candidates.pairs.size());
+  for (const auto& [u, v] : candidates.pairs) bridges.push_back(graph_.AddEdge(u, v, false));
+  build_stats_.alignments += candidates.alignments;
   std::sort(bridges.begin(), bridges.end());
   bridges.erase(std::unique(bridges.begin(), bridges.end()), bridges.end());
   SyncEdgeData();

@@ -216,6 +216,9 @@ class HybridizationSession {
 
   const ClearanceChecker* checker_;
   MergeOptions options_;
+  // The candidate options with the build's resolved parameters (radius, gaps): AddPaths and the
+  // post-optimization's new points use them, so that they do not drift with new inputs.
+  CandidateOptions candidates_;
   HGraph graph_;
   MergeStats build_stats_;
   MergeTiming build_timing_;

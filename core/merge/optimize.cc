@@ -60,7 +60,7 @@ SearchResult PostOptimizer::Run(SearchResult best) {
   edges_before_ = graph_.num_edges();
   result_->stats.optimize_stop = OptimizeStop::kConverged;
   // Bridges from a shortcut's new points reach the nodes within the H-Graph's own scale.
-  reach_ = NewNodeReach(graph_, session_.checker_->space(), session_.build_stats_.radius);
+  reach_ = NewNodeReach(graph_, session_.checker_->space(), session_.candidates_.radius);
   objective_ = measure_.Objective(EvaluateEdges(graph_, best.edges, measure_.spec().k));
   found_ = std::move(best);
   Stream();

@@ -799,21 +799,40 @@ TEST_F(MergeTest, PostOptimizationShortensWithCertifiedMotionsAndStreamsEachImpr
 TEST_F(MergeTest, AddPathsGrowsTheHGraphLikeMergingEverythingAtOnce) {
   const LocalPlanner planner = MakePlanner();
   const std::vector<InputPath> inputs = PerturbedPaths(planner, 7, 3);
+  for (const Variant variant : {Variant::kAllPairs, Variant::kNeighborhood, Variant::kKNearest,
+                                Variant::kEditDistance, Variant::kEditDistanceNeighborhood}) {
+    SCOPED_TRACE(VariantName(variant));
+    const MergeOptions options{.candidates = {.variant = variant, .phi = 3}, .optimize_ms = 0};
+    HybridizationSession grown(planner, MergeRequest{.paths = {inputs[0]}, .options = options});
+    const MergeResult alone = grown.Query({});
+    EXPECT_GE(grown.AddPaths({inputs[1], inputs[2]}), 0);
+    const MergeResult after = grown.Query({});
+    // At once, with the parameters the first build resolved (AddPaths keeps them).
+    MergeOptions at_once = options;
+    at_once.candidates.radius = alone.stats.radius;
+    at_once.candidates.gap_init = alone.stats.gap_init;
+    at_once.candidates.gap_extend = alone.stats.gap_extend;
+    const MergeResult together = Merge(planner, MergeRequest{.paths = inputs, .options = at_once});
+    ASSERT_EQ(after.inputs.size(), 3u);
+    EXPECT_EQ(after.inputs[2].name, inputs[2].name);
+    EXPECT_EQ(after.stats.nodes, together.stats.nodes);
+    EXPECT_LE(after.objective, alone.objective + 1e-9);
+    if (variant == Variant::kKNearest) {
+      // The pairs of old nodes that new ones push out of the k nearest stay: a superset.
+      EXPECT_GE(after.stats.candidate_edges, together.stats.candidate_edges);
+      EXPECT_LE(after.objective, together.objective + 1e-9 * together.objective);
+    } else {
+      EXPECT_EQ(after.stats.candidate_edges, together.stats.candidate_edges);
+      EXPECT_EQ(after.stats.alignments, together.stats.alignments);
+      EXPECT_NEAR(after.objective, together.objective, 1e-9 * together.objective);
+    }
+    // What the first query checked is not checked again.
+    EXPECT_GT(after.stats.edges_reused, 0);
+  }
   const MergeOptions options{.candidates = {.variant = Variant::kAllPairs}, .optimize_ms = 0};
   HybridizationSession grown(planner, MergeRequest{.paths = {inputs[0]}, .options = options});
-  const MergeResult alone = grown.Query({});
-  ASSERT_EQ(alone.inputs.size(), 1u);
-  EXPECT_GT(grown.AddPaths({inputs[1], inputs[2]}), 0);
+  grown.AddPaths({inputs[1]});
   const MergeResult after = grown.Query({});
-  const MergeResult together = Merge(planner, MergeRequest{.paths = inputs, .options = options});
-  ASSERT_EQ(after.inputs.size(), 3u);
-  EXPECT_EQ(after.inputs[2].name, inputs[2].name);
-  EXPECT_EQ(after.stats.nodes, together.stats.nodes);
-  // All-pairs either way: the same candidates, so the same optimum, and what the first query
-  // checked is not checked again.
-  EXPECT_NEAR(after.objective, together.objective, 1e-9 * together.objective);
-  EXPECT_LE(after.objective, alone.objective + 1e-9);
-  EXPECT_GT(after.stats.edges_reused, 0);
   // A path that does not share the start is refused with its field named, and the H-Graph
   // is unchanged.
   InputPath stray = inputs[1];
