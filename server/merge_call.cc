@@ -159,29 +159,26 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
       out->clear_hgraph();
       out->clear_generation();
     };
-    try {
-      service_->sessions_.KeepHGraph(name);
-    } catch (const Error& e) {
-      if (e.code() != ErrorCode::kNotFound) throw;
-      spdlog::info("MergePaths session={} was deleted while the merge ran; H-Graph not kept",
-                   session);
-      return not_kept();
-    }
+    // In the cache before the registry says kept: a GetHGraph in between sees the merge still
+    // running, never a kept name with nothing behind it.
     const size_t bytes = stored->session->memory_bytes();
     if (!service_->cache_.Put(CacheKind::kHGraph, name, std::move(stored), bytes)) {
       // Larger than the whole budget: the result stands, but there is nothing to re-query.
-      service_->sessions_.RemoveHGraph(name);
+      service_->sessions_.AbandonHGraph(name);
       spdlog::warn("MergePaths session={} H-Graph of {} bytes exceeds --cache-bytes; not kept",
                    session, bytes);
       return not_kept();
     }
     try {
-      // Deleted between KeepHGraph and the Put: DeleteSession could not drop what was not yet
-      // in the cache, so this call does.
-      // (Re-created since by another tenant: not this call's session any more either.)
+      service_->sessions_.KeepHGraph(name);
+      // Re-created since by another tenant: not this call's session any more.
       service_->sessions_.Touch(session, "session", tenant_);
     } catch (const Error& e) {
       if (e.code() != ErrorCode::kNotFound && e.code() != ErrorCode::kPermissionDenied) throw;
+      // Deleted (or expired) while the merge ran: DeleteSession could not drop what was not yet
+      // kept, so this call does.
+      spdlog::info("MergePaths session={} was deleted while the merge ran; H-Graph not kept",
+                   session);
       service_->cache_.Erase(CacheKind::kHGraph, name);
       return not_kept();
     }

@@ -69,7 +69,7 @@ void LazyEdgeEvaluator::CheckEdges(const std::vector<int>& edge_ids, EdgeProof n
     if (cancel.stopped()) return;
     const int e = edge_ids[k];
     HEdge& edge = graph_.mutable_edge(e);
-    const EdgeReport previous = std::move(edge.report);
+    EdgeReport previous = std::move(edge.report);
     // A profile reuses the clearances known on its grid: the ends' and the probes'.
     std::vector<ClearanceSample> known;
     if (need == EdgeProof::kProfile) {
@@ -79,14 +79,21 @@ void LazyEdgeEvaluator::CheckEdges(const std::vector<int>& edge_ids, EdgeProof n
       if (!std::isnan(evidence_.node_clearance[edge.v]))
         known.push_back({1.0, evidence_.node_clearance[edge.v]});
     }
-    edge.report = checker_->CheckEdge(
-        EdgeCheckRequest{.from = &graph_.node(edge.u).q,
-                         .to = &graph_.node(edge.v).q,
-                         .proof = need,
-                         .known = {.from_valid = evidence_.node_valid[edge.u] != 0,
-                                   .to_valid = evidence_.node_valid[edge.v] != 0,
-                                   .samples_valid = previous.state == EdgeState::kValid,
-                                   .clearances = known.empty() ? nullptr : &known}});
+    try {
+      edge.report = checker_->CheckEdge(
+          EdgeCheckRequest{.from = &graph_.node(edge.u).q,
+                           .to = &graph_.node(edge.v).q,
+                           .proof = need,
+                           .known = {.from_valid = evidence_.node_valid[edge.u] != 0,
+                                     .to_valid = evidence_.node_valid[edge.v] != 0,
+                                     .samples_valid = previous.state == EdgeState::kValid,
+                                     .clearances = known.empty() ? nullptr : &known},
+                           .cancel = &cancel});
+    } catch (...) {
+      // A check stopped by the caller leaves the edge as it was (a stored H-Graph keeps it).
+      edge.report = std::move(previous);
+      throw;
+    }
     // A re-check for clearance keeps counting what the first check cost.
     if (previous.state != EdgeState::kUnchecked) {
       edge.report.collision_checks += previous.collision_checks;

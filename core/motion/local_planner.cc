@@ -74,7 +74,7 @@ class EdgeCheck {
  public:
   EdgeCheck(const Space& space, const std::vector<int>& body_component,
             const std::vector<double>& body_radius, CollisionContext& context, const Config& from,
-            const Config& to, const ClearanceBound* bound = nullptr,
+            const Config& to, const CancelToken* cancel, const ClearanceBound* bound = nullptr,
             std::atomic<int64_t>* bound_total = nullptr)
       : space_(space),
         body_component_(body_component),
@@ -82,6 +82,7 @@ class EdgeCheck {
         context_(context),
         from_(from),
         to_(to),
+        cancel_(cancel),
         bound_(bound),
         bound_total_(bound_total) {}
   ~EdgeCheck() {
@@ -146,6 +147,11 @@ class EdgeCheck {
 
   Config At(double t) const { return space_.Interpolate(from_, to_, t); }
 
+  // Every kCancelStride queries, throws if the caller stopped the check.
+  void Tick() {
+    if (cancel_ != nullptr && ++ticks_ % kCancelStride == 0) cancel_->ThrowIfStopped();
+  }
+
   double MotionBound(const Config& a, const Config& b) const {
     return RobotMotionBound(space_, body_component_, body_radius_, a, b);
   }
@@ -181,6 +187,7 @@ class EdgeCheck {
     if (!known.to_valid && !context_.Valid(to_)) return 1.0;
     if (!known.from_valid && !context_.Valid(from_)) return 0.0;
     for (int k : BisectionOrder(segments)) {
+      Tick();
       const double t = static_cast<double>(k) / segments;
       if (!context_.Valid(At(t))) return t;
     }
@@ -209,6 +216,7 @@ class EdgeCheck {
     if (a.exact && a.clearance <= 0) return Advanced{.invalid_at = 0.0};
     Config q_a = from_;
     while (a.t < 1) {
+      Tick();
       double reach = bound > 0 ? kMargin * a.clearance / bound : 1.0;
       // A bound too small to step on is measured exactly before advancement gives up.
       if (reach < finest && !a.exact) {
@@ -241,6 +249,7 @@ class EdgeCheck {
     samples.reserve(segments + 1);
     size_t next_known = 0;
     for (int k = 0; k <= segments; ++k) {
+      Tick();
       const double t = static_cast<double>(k) / segments;
       grid.push_back(k == 0 ? from_ : k == segments ? to_ : At(t));
       while (known != nullptr && next_known < known->size() && (*known)[next_known].t < t) {
@@ -259,6 +268,7 @@ class EdgeCheck {
     }
     profile->reserve(samples.size());
     for (int k = 0; k < segments; ++k) {
+      Tick();
       profile->push_back(samples[k]);
       if (!Refine(samples[k], grid[k], samples[k + 1], grid[k + 1], 0, *profile)) return false;
     }
@@ -276,11 +286,14 @@ class EdgeCheck {
   CollisionContext& context_;
   const Config& from_;
   const Config& to_;
+  const CancelToken* cancel_;
   const ClearanceBound* bound_;
   std::atomic<int64_t>* bound_total_;
+  static constexpr int64_t kCancelStride = 256;
   bool certified_ = true;
   double invalid_at_ = -1;
   int64_t bound_queries_ = 0;
+  int64_t ticks_ = 0;
 };
 
 }  // namespace
@@ -358,7 +371,7 @@ EdgeReport LocalPlanner::CheckEdge(const EdgeCheckRequest& request) const {
   // Three stages, each skipped where the request knows or does not ask for its answer: the
   // samples at the resolution, conservative advancement for a certificate, the profile.
   const int segments = SampleCount(report.length) - 1;
-  EdgeCheck check(s, impl_->body_component, impl_->body_radius, context, from, to);
+  EdgeCheck check(s, impl_->body_component, impl_->body_radius, context, from, to, request.cancel);
   if (!request.known.samples_valid) {
     const double t = check.FirstInvalidSample(segments, request.known);
     if (t >= 0) return invalid(t);
@@ -367,7 +380,7 @@ EdgeReport LocalPlanner::CheckEdge(const EdgeCheckRequest& request) const {
   if (request.proof == EdgeProof::kSamples) return finish();
   if (request.proof != EdgeProof::kProfile) {
     EdgeCheck advance(s, impl_->body_component, impl_->body_radius, context, from, to,
-                      options_.clearance_bound.get(), &impl_->bound_queries);
+                      request.cancel, options_.clearance_bound.get(), &impl_->bound_queries);
     const EdgeCheck::Advanced advanced = advance.Advance(segments);
     if (advanced.invalid_at >= 0) return invalid(advanced.invalid_at);
     if (advanced.certified) {

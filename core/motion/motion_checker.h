@@ -5,6 +5,7 @@
 #include <limits>
 #include <vector>
 
+#include "core/common/progress.h"
 #include "core/space/clearance_witness.h"
 #include "core/space/space.h"
 
@@ -92,6 +93,9 @@ struct EdgeCheckRequest {
   const Config* to = nullptr;
   EdgeProof proof = EdgeProof::kSamples;
   EdgeKnown known;
+  // Stops a long check (an edge of many samples at a fine resolution) between samples: CheckEdge
+  // throws the token's error (ThrowIfStopped) once it is stopped. May be null.
+  const CancelToken* cancel = nullptr;
 };
 
 // How ProbeClearance takes its samples: a distance query at each point, or first a collision

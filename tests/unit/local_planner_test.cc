@@ -13,6 +13,8 @@
 #include <vector>
 
 #include "core/common/error.h"
+#include "core/common/limits.h"
+#include "core/common/progress.h"
 #include "core/measure/measure.h"
 
 namespace hgraph {
@@ -150,6 +152,29 @@ TEST(LocalPlannerTest, SampleCountFollowsResolution) {
     const Config from = Vec({0.5, 0.5}), to = Vec({9.5, 9.5});
     const EdgeReport report = Check(planner, from, to);
     EXPECT_EQ(report.collision_checks, planner.SampleCount(report.length)) << resolution;
+  }
+}
+
+// A check at the finest resolution allowed (over half a million samples here) stops when its
+// caller does: a cancelled merge or a server shutting down does not wait for it.
+TEST(LocalPlannerTest, AStoppedCallerStopsALongCheck) {
+  const LocalPlanner planner(PointWorld({Box(5, 5, 2, 2)}), {.resolution = limits::kMinResolution});
+  const Config from = Vec({1, 1}), to = Vec({9, 1});
+  ASSERT_GT(planner.SampleCount(8.0), 500000);
+  for (EdgeProof proof : {EdgeProof::kSamples, EdgeProof::kProfile}) {
+    CancelToken cancel;
+    cancel.Cancel();
+    try {
+      planner.CheckEdge({.from = &from, .to = &to, .proof = proof, .cancel = &cancel});
+      ADD_FAILURE() << "a cancelled check ran to its end";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), ErrorCode::kCancelled);
+    }
+    // Without a token the same check runs to its end (the samples only: a profile is slower).
+    if (proof == EdgeProof::kSamples) {
+      EXPECT_EQ(planner.CheckEdge({.from = &from, .to = &to, .proof = proof}).state,
+                EdgeState::kValid);
+    }
   }
 }
 

@@ -669,11 +669,13 @@ TEST_F(MergeTest, AddPathsWorkAndInvalidInputsReachTheNextQuerysStats) {
   EXPECT_EQ(again.stats.edges_checked, 0);
   const InputPath straight{.name = "straight",
                            .waypoints = {inputs[0].waypoints.front(), inputs[0].waypoints.back()}};
-  // Start and goal only: no new node, so no bridge; one input edge, which the AddPaths checks.
-  EXPECT_EQ(session.AddPaths({straight}), 0);
+  // Start and goal only: no new node, one input edge and the bridges its alignment with the
+  // stored inputs adds, all of which the eager AddPaths checks.
+  const int64_t bridges = session.AddPaths({straight});
   const MergeResult after = session.Query({});
   EXPECT_EQ(after.stats.input_edges_invalid, 1);
-  EXPECT_GE(after.stats.edges_checked, 1);
+  EXPECT_EQ(after.stats.candidate_edges, before.stats.candidate_edges + bridges);
+  EXPECT_GE(after.stats.edges_checked, 1 + bridges);  // and the path its query certifies
   EXPECT_GT(after.stats.collision_checks, 0);
   // Reported once: the query after it did no work of its own.
   const MergeResult later = session.Query({});
