@@ -23,13 +23,14 @@ namespace {
 // goal bit for bit.
 template <typename Simplify>
 InputPath SimplifyWithOmpl(const MotionChecker& checker, const InputPath& path, uint64_t seed,
-                           double resolution, const Simplify& simplify) {
+                           double resolution, OmplMotionCheck motion_check,
+                           const Simplify& simplify) {
   const Space& space = checker.space();
   ValidatePath(space, path, "path", 2);
   QuietOmplLogging();
   auto lock = LockOmplRandomness();
   SeedOmpl(seed);
-  const ob::SpaceInformationPtr si = MakeSpaceInformation(checker, resolution);
+  const ob::SpaceInformationPtr si = MakeSpaceInformation(checker, resolution, motion_check);
   og::PathGeometric omplPath = ToOmplPath(si, space, path);
   og::PathSimplifier simplifier(si);
   simplify(simplifier, omplPath, lock);
@@ -45,6 +46,7 @@ InputPath SimplifyWithOmpl(const MotionChecker& checker, const InputPath& path, 
 InputPath ShortcutPath(const MotionChecker& checker, const InputPath& path,
                        const ShortcutOptions& options) {
   return SimplifyWithOmpl(checker, path, options.seed, options.resolution,
+                          OmplMotionCheck::kCertified,
                           [&](og::PathSimplifier& simplifier, og::PathGeometric& omplPath,
                               std::unique_lock<std::mutex>& lock) {
                             // The simplifier's own generator is drawn; reduceVertices and
@@ -61,7 +63,7 @@ InputPath ShortcutPath(const MotionChecker& checker, const InputPath& path,
 
 InputPath SimplifyMaxPath(const MotionChecker& checker, const InputPath& path,
                           const SimplifyMaxOptions& options) {
-  return SimplifyWithOmpl(checker, path, options.seed, options.resolution,
+  return SimplifyWithOmpl(checker, path, options.seed, options.resolution, options.motion_check,
                           [](og::PathSimplifier& simplifier, og::PathGeometric& omplPath,
                              std::unique_lock<std::mutex>&) { simplifier.simplifyMax(omplPath); });
 }
@@ -74,7 +76,8 @@ InputPath OmplHybridize(const MotionChecker& checker, const std::vector<InputPat
     ValidatePath(space, paths[i], "paths[" + std::to_string(i) + "]", 2);
   }
   QuietOmplLogging();
-  const ob::SpaceInformationPtr si = MakeSpaceInformation(checker, options.resolution);
+  const ob::SpaceInformationPtr si =
+      MakeSpaceInformation(checker, options.resolution, options.motion_check);
   og::PathHybridization hybridization(si);
   // The hybridizer keeps pointers to the recorded paths; they live until it is done.
   std::vector<og::PathGeometricPtr> recorded;

@@ -12,6 +12,16 @@
 
 namespace hgraph {
 
+// How the baselines check a motion.
+enum class OmplMotionCheck {
+  // MotionChecker::CheckEdge with a certificate: OMPL accepts exactly the motions a merge accepts.
+  kCertified,
+  // OMPL's own DiscreteMotionValidator, as OMPL ships it: the states at the resolution's steps
+  // only (MotionChecker::IsValid), so a motion may graze an obstacle between two of them. What
+  // OMPL users run; its outputs are not certified.
+  kDiscrete,
+};
+
 struct ShortcutOptions {
   uint64_t seed = 1;  // PathSimplifier draws random pairs of points to connect
   // Rounds of reduceVertices + shortcutPath; stops early when a round shortens nothing.
@@ -29,12 +39,14 @@ InputPath ShortcutPath(const MotionChecker& checker, const InputPath& path,
 struct SimplifyMaxOptions {
   uint64_t seed = 1;
   double resolution = 0.01;
+  OmplMotionCheck motion_check = OmplMotionCheck::kCertified;
 };
 
 // OMPL's PathSimplifier::simplifyMax on one path: OMPL's full simplification (reduceVertices,
 // shortcutPath, collapseCloseVertices, B-spline smoothing, repeated while it improves) without a
 // time limit, the pipeline OMPL users run after PathHybridization. Keeps start and goal; every
-// new edge is checked with `checker` at OMPL's discretisation. Throws InputError as ShortcutPath.
+// new edge is checked with `checker` at OMPL's discretisation, as options.motion_check says.
+// Throws InputError as ShortcutPath.
 InputPath SimplifyMaxPath(const MotionChecker& checker, const InputPath& path,
                           const SimplifyMaxOptions& options = {});
 
@@ -42,6 +54,7 @@ struct OmplHybridizationOptions {
   double resolution = kDefaultResolution;
   // OMPL's recordPath(..., matchAcrossGaps): also bridge the ends of unmatched stretches.
   bool match_across_gaps = true;
+  OmplMotionCheck motion_check = OmplMotionCheck::kCertified;
 };
 
 // OMPL's geometric::PathHybridization on `paths` (same start and goal). Throws InputError naming

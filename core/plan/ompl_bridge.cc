@@ -1,5 +1,6 @@
 #include "core/plan/ompl_bridge.h"
 
+#include <ompl/base/DiscreteMotionValidator.h>
 #include <ompl/base/spaces/RealVectorStateSpace.h>
 #include <ompl/base/spaces/SE2StateSpace.h>
 #include <ompl/base/spaces/SE3StateSpace.h>
@@ -230,14 +231,19 @@ Config FromOmpl(const Space& space, const ob::State* state) {
   return q;
 }
 
-ob::SpaceInformationPtr MakeSpaceInformation(const MotionChecker& checker, double resolution) {
+ob::SpaceInformationPtr MakeSpaceInformation(const MotionChecker& checker, double resolution,
+                                             OmplMotionCheck motion_check) {
   if (!(resolution > 0) || !std::isfinite(resolution)) {
     throw InputError("resolution",
                      "must be positive and finite, got " + std::to_string(resolution));
   }
   auto si = std::make_shared<ob::SpaceInformation>(MakeStateSpace(checker.space(), resolution));
   si->setStateValidityChecker(std::make_shared<CheckerValidity>(si, checker));
-  si->setMotionValidator(std::make_shared<CheckerMotion>(si, checker));
+  if (motion_check == OmplMotionCheck::kDiscrete) {
+    si->setMotionValidator(std::make_shared<ob::DiscreteMotionValidator>(si));
+  } else {
+    si->setMotionValidator(std::make_shared<CheckerMotion>(si, checker));
+  }
   si->setup();
   return si;
 }

@@ -14,6 +14,7 @@
 
 #include "core/motion/motion_checker.h"
 #include "core/path/path.h"
+#include "core/plan/baselines.h"
 #include "core/space/space.h"
 
 namespace hgraph::plan_internal {
@@ -28,11 +29,13 @@ ompl::base::StateSpacePtr MakeStateSpace(const Space& space, double resolution);
 void ToOmpl(const Space& space, const Config& q, ompl::base::State* state);
 Config FromOmpl(const Space& space, const ompl::base::State* state);
 
-// Validity and motion checks answered by `checker` (which must outlive the returned object). The
-// motion validator runs MotionChecker::CheckEdge, so OMPL accepts exactly the motions that a
-// merge accepts. Thread safe as far as the checker is (PRM checks from two threads).
-ompl::base::SpaceInformationPtr MakeSpaceInformation(const MotionChecker& checker,
-                                                     double resolution);
+// Validity and motion checks answered by `checker` (which must outlive the returned object). With
+// kCertified the motion validator runs MotionChecker::CheckEdge, so OMPL accepts exactly the
+// motions that a merge accepts; with kDiscrete it is OMPL's DiscreteMotionValidator on the
+// checker's state validity. Thread safe as far as the checker is (PRM checks from two threads).
+ompl::base::SpaceInformationPtr MakeSpaceInformation(
+    const MotionChecker& checker, double resolution,
+    OmplMotionCheck motion_check = OmplMotionCheck::kCertified);
 
 ompl::geometric::PathGeometric ToOmplPath(const ompl::base::SpaceInformationPtr& si,
                                           const Space& space, const InputPath& path);

@@ -1,8 +1,10 @@
 // hgraph against the pipeline OMPL users run today, side by side in one run (issue 10, item 5).
 // For every scene: fixed PRM inputs (planned once with a fixed seed and written to --out, or read
 // back from there), fed identically to every method; the methods alternate run by run and the
-// figures are medians over --runs. Every output is certified by our own CheckPaths. Writes
-// results.json, results.md and results.svg to --out. Never asserts: see README.md.
+// figures are medians over --runs. Every output is certified by our own CheckPaths. OMPL's
+// pipeline runs twice: on our certified checker (the same motions a merge accepts) and as OMPL
+// ships it (its DiscreteMotionValidator, no certificate), which is the time users compare with.
+// Writes results.json, results.md and results.svg to --out. Never asserts: see README.md.
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <atomic>
@@ -17,6 +19,7 @@
 #include <memory>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/adapter/path_io.h"
@@ -101,6 +104,9 @@ struct Method {
   std::string label;             // for tables and the chart
   bool ompl = false;             // counts towards "best certified OMPL"
   bool clearance_bound = false;  // runs on Problem::bound_planner
+  // OMPL's pipeline as OMPL ships it (its DiscreteMotionValidator): the name of the certified
+  // OMPL method that runs the same pipeline on our checker; empty for every other method.
+  std::string shipped_twin;
   std::function<Output(const ClearanceChecker&, const Problem&)> run;
 };
 
@@ -117,10 +123,13 @@ struct Run {
   bool certified = false;
   int64_t collision_checks = 0;
   int64_t distance_queries = 0;
-  int64_t edges_checked = 0;
-  int64_t search_rounds = -1;
+  int64_t edges_checked = -1;  // -1: not counted
+  int64_t search_rounds = -1;  // -1: not a merge
   int64_t certify_checks = 0;  // collision checks + distance queries to certify the output alone
 };
+
+// A count that was not taken (-1) is NaN: "-" in tables, null in JSON.
+double Count(int64_t n) { return n < 0 ? NAN : static_cast<double>(n); }
 
 double Median(std::vector<double> v) {
   if (v.empty()) return NAN;
@@ -133,9 +142,11 @@ struct Summary {
   std::string method;
   std::string label;
   bool ompl = false;
+  std::string shipped_twin;
   int runs_ok = 0;
   std::string error;
-  bool certified = false;  // every run certified
+  bool certified = false;     // every run certified
+  int runs_in_collision = 0;  // runs whose output CheckPaths found in collision
   double ms = NAN, length = NAN, objective = NAN, hgraph_objective = NAN, min_clearance = NAN,
          inverse_clearance = NAN, collision_checks = NAN, distance_queries = NAN,
          edges_checked = NAN, search_rounds = NAN, certify_checks = NAN, limit_ratio = NAN;
@@ -157,8 +168,8 @@ const SummaryFigure kSummaryFigures[] = {
      [](const Run& r) { return static_cast<double>(r.collision_checks); }},
     {&Summary::distance_queries,
      [](const Run& r) { return static_cast<double>(r.distance_queries); }},
-    {&Summary::edges_checked, [](const Run& r) { return static_cast<double>(r.edges_checked); }},
-    {&Summary::search_rounds, [](const Run& r) { return static_cast<double>(r.search_rounds); }},
+    {&Summary::edges_checked, [](const Run& r) { return Count(r.edges_checked); }},
+    {&Summary::search_rounds, [](const Run& r) { return Count(r.search_rounds); }},
     {&Summary::certify_checks, [](const Run& r) { return static_cast<double>(r.certify_checks); }},
     {&Summary::limit_ratio,
      [](const Run& r) {
@@ -168,7 +179,7 @@ const SummaryFigure kSummaryFigures[] = {
 };
 
 Summary Summarize(const Method& m, const std::vector<Run>& runs) {
-  Summary s{.method = m.name, .label = m.label, .ompl = m.ompl};
+  Summary s{.method = m.name, .label = m.label, .ompl = m.ompl, .shipped_twin = m.shipped_twin};
   std::vector<std::vector<double>> values(std::size(kSummaryFigures));
   s.certified = !runs.empty();
   for (const Run& r : runs) {
@@ -179,6 +190,7 @@ Summary Summarize(const Method& m, const std::vector<Run>& runs) {
     }
     ++s.runs_ok;
     s.certified = s.certified && r.certified;
+    if (!r.valid) ++s.runs_in_collision;
     for (size_t i = 0; i < values.size(); ++i) values[i].push_back(kSummaryFigures[i].of(r));
   }
   if (s.runs_ok == 0) return s;
@@ -204,8 +216,12 @@ Run RunOnce(const Method& m, const Problem& p, double k) {
   r.collision_checks = planner.total_collision_checks() - cc0;
   r.distance_queries = planner.total_distance_queries() - dq0;
   // The merge counts its own local-planner runs (MergeStats::edges_checked); the others are
-  // counted at the checker.
-  r.edges_checked = out.engine_edges_checked >= 0 ? out.engine_edges_checked : counter.edges();
+  // counted at the checker, except OMPL's own motion validator, which never asks it for an edge.
+  if (out.engine_edges_checked >= 0) {
+    r.edges_checked = out.engine_edges_checked;
+  } else if (m.shipped_twin.empty()) {
+    r.edges_checked = counter.edges();
+  }
   r.search_rounds = out.search_rounds;
   r.objective = out.objective;
   r.hgraph_objective = out.hgraph_objective;
@@ -273,23 +289,35 @@ std::vector<Method> Methods(const Problem& p, bool inverse_clearance_pair, uint6
   m.push_back(HgraphMethod("hgraph-report-clearance", "hgraph --report-clearance", {},
                            MergeOptions{.report_clearance = true}));
   const double res = p.resolution;
+  // OMPL's PathHybridization (matching across gaps or not) and then simplifyMax, every motion
+  // checked as `check` says.
+  const auto hybridize_simplify = [res, seed](bool gaps, OmplMotionCheck check) {
+    return [res, seed, gaps, check](const ClearanceChecker& c, const Problem& q) {
+      const InputPath h = OmplHybridize(
+          c, q.inputs, {.resolution = res, .match_across_gaps = gaps, .motion_check = check});
+      return Output{
+          .path = SimplifyMaxPath(c, h, {.seed = seed, .resolution = res, .motion_check = check})};
+    };
+  };
   m.push_back(Method{.name = "ompl-hybridize-gaps+simplifymax",
                      .label = "OMPL hybridize (gaps) + simplifyMax",
                      .ompl = true,
-                     .run = [res, seed](const ClearanceChecker& c, const Problem& q) {
-                       const InputPath h = OmplHybridize(c, q.inputs, {.resolution = res});
-                       return Output{.path =
-                                         SimplifyMaxPath(c, h, {.seed = seed, .resolution = res})};
-                     }});
-  m.push_back(
-      Method{.name = "ompl-hybridize-nogaps+simplifymax",
-             .label = "OMPL hybridize (no gaps) + simplifyMax",
-             .ompl = true,
-             .run = [res, seed](const ClearanceChecker& c, const Problem& q) {
-               const InputPath h =
-                   OmplHybridize(c, q.inputs, {.resolution = res, .match_across_gaps = false});
-               return Output{.path = SimplifyMaxPath(c, h, {.seed = seed, .resolution = res})};
-             }});
+                     .run = hybridize_simplify(true, OmplMotionCheck::kCertified)});
+  m.push_back(Method{.name = "ompl-hybridize-nogaps+simplifymax",
+                     .label = "OMPL hybridize (no gaps) + simplifyMax",
+                     .ompl = true,
+                     .run = hybridize_simplify(false, OmplMotionCheck::kCertified)});
+  // The same two pipelines as OMPL ships them: its DiscreteMotionValidator at the same
+  // resolution, no certificate (what OMPL users run and time); CheckPaths judges the output
+  // afterwards, outside the timed part, like every method's.
+  m.push_back(Method{.name = "ompl-shipped-hybridize-gaps+simplifymax",
+                     .label = "OMPL as shipped: hybridize (gaps) + simplifyMax",
+                     .shipped_twin = "ompl-hybridize-gaps+simplifymax",
+                     .run = hybridize_simplify(true, OmplMotionCheck::kDiscrete)});
+  m.push_back(Method{.name = "ompl-shipped-hybridize-nogaps+simplifymax",
+                     .label = "OMPL as shipped: hybridize (no gaps) + simplifyMax",
+                     .shipped_twin = "ompl-hybridize-nogaps+simplifymax",
+                     .run = hybridize_simplify(false, OmplMotionCheck::kDiscrete)});
   m.push_back(Method{.name = "ompl-simplifymax-best-input",
                      .label = "OMPL simplifyMax on best input",
                      .ompl = true,
@@ -401,7 +429,18 @@ struct SceneResult {
   std::vector<Summary> methods;
   int best_ompl = -1;  // index into methods
   double length_ratio = NAN, time_ratio = NAN;
+  // "OMPL as shipped": the shipped pipeline whose certified twin gave the shorter certified
+  // output (or, without certified twins, the shipped pipeline with the shorter output).
+  int shipped = -1;
+  double shipped_length_ratio = NAN, shipped_time_ratio = NAN;
 };
+
+int FindMethod(const SceneResult& s, const std::string& name) {
+  for (size_t i = 0; i < s.methods.size(); ++i) {
+    if (s.methods[i].method == name) return static_cast<int>(i);
+  }
+  return -1;
+}
 
 void Compare(SceneResult* s) {
   for (size_t i = 0; i < s->methods.size(); ++i) {
@@ -410,9 +449,32 @@ void Compare(SceneResult* s) {
     if (s->best_ompl < 0 || m.length < s->methods[s->best_ompl].length)
       s->best_ompl = static_cast<int>(i);
   }
-  if (s->best_ompl < 0 || s->methods[0].runs_ok == 0) return;
-  s->length_ratio = s->methods[0].length / s->methods[s->best_ompl].length;
-  s->time_ratio = s->methods[0].ms / s->methods[s->best_ompl].ms;
+  // The shipped pipeline whose certified twin is shortest; without one, the shortest shipped.
+  for (const bool by_twin : {true, false}) {
+    double shortest = INFINITY;
+    for (size_t i = 0; i < s->methods.size(); ++i) {
+      const Summary& m = s->methods[i];
+      if (m.shipped_twin.empty() || m.runs_ok == 0) continue;
+      const int twin = FindMethod(*s, m.shipped_twin);
+      if (by_twin && (twin < 0 || !s->methods[twin].certified)) continue;
+      const double length = by_twin ? s->methods[twin].length : m.length;
+      if (length < shortest) {
+        shortest = length;
+        s->shipped = static_cast<int>(i);
+      }
+    }
+    if (s->shipped >= 0) break;
+  }
+  const Summary& defaults = s->methods[0];
+  if (defaults.runs_ok == 0) return;
+  if (s->best_ompl >= 0) {
+    s->length_ratio = defaults.length / s->methods[s->best_ompl].length;
+    s->time_ratio = defaults.ms / s->methods[s->best_ompl].ms;
+  }
+  if (s->shipped >= 0) {
+    s->shipped_length_ratio = defaults.length / s->methods[s->shipped].length;
+    s->shipped_time_ratio = defaults.ms / s->methods[s->shipped].ms;
+  }
 }
 
 std::string Json(const std::vector<SceneResult>& scenes, const std::string& command, int runs) {
@@ -428,12 +490,17 @@ std::string Json(const std::vector<SceneResult>& scenes, const std::string& comm
     o << "],\n     \"best_certified_ompl\": "
       << (s.best_ompl >= 0 ? Quote(s.methods[s.best_ompl].method) : "null")
       << ", \"defaults_length_ratio\": " << Num(s.length_ratio, 6)
-      << ", \"defaults_time_ratio\": " << Num(s.time_ratio, 6) << ",\n     \"methods\": [";
+      << ", \"defaults_time_ratio\": " << Num(s.time_ratio, 6) << ",\n     \"ompl_as_shipped\": "
+      << (s.shipped >= 0 ? Quote(s.methods[s.shipped].method) : "null")
+      << ", \"defaults_vs_shipped_length_ratio\": " << Num(s.shipped_length_ratio, 6)
+      << ", \"defaults_vs_shipped_time_ratio\": " << Num(s.shipped_time_ratio, 6)
+      << ",\n     \"methods\": [";
     for (size_t i = 0; i < s.methods.size(); ++i) {
       const Summary& m = s.methods[i];
       o << (i ? "," : "") << "\n       {\"method\": " << Quote(m.method)
         << ", \"runs_ok\": " << m.runs_ok << ", \"error\": " << Quote(m.error)
         << ", \"certified\": " << (m.certified ? "true" : "false")
+        << ", \"runs_in_collision\": " << m.runs_in_collision
         << ", \"length\": " << Num(m.length, 8) << ", \"objective\": " << Num(m.objective, 8)
         << ", \"hgraph_objective\": " << Num(m.hgraph_objective, 8)
         << ", \"min_clearance\": " << Num(m.min_clearance, 6)
@@ -451,16 +518,62 @@ std::string Json(const std::vector<SceneResult>& scenes, const std::string& comm
   return o.str();
 }
 
+// "yes", "no", or "no, in collision in k of n runs".
+std::string Certified(const Summary& m) {
+  if (m.certified) return "yes";
+  if (m.runs_in_collision == 0) return "no";
+  return "no, in collision in " + std::to_string(m.runs_in_collision) + " of " +
+         std::to_string(m.runs_ok) + " runs";
+}
+
+// The headline: hgraph defaults against OMPL as shipped (the price users compare) and against
+// the best certified OMPL pipeline (the same checker for both), per scene and at the median.
+void Headline(const std::vector<SceneResult>& scenes, std::ostringstream& o) {
+  o << "| scene | hgraph defaults ms | OMPL as shipped ms | **defaults / shipped time** | best "
+       "certified OMPL ms | defaults / best cert. time | defaults length | shipped length "
+       "(cert.) | best cert. OMPL length | **defaults / shipped length** | defaults / best "
+       "cert. length |\n|---|---|---|---|---|---|---|---|---|---|---|\n";
+  std::vector<double> shipped_time, shipped_length, best_time, best_length;
+  for (const SceneResult& s : scenes) {
+    const Summary& d = s.methods[0];
+    const Summary* shipped = s.shipped >= 0 ? &s.methods[s.shipped] : nullptr;
+    const Summary* best = s.best_ompl >= 0 ? &s.methods[s.best_ompl] : nullptr;
+    o << "| " << s.name << " | " << Cell(d.ms, 4) << " | " << (shipped ? Cell(shipped->ms, 4) : "-")
+      << " | **" << Cell(s.shipped_time_ratio, 3) << "** | " << (best ? Cell(best->ms, 4) : "-")
+      << " | " << Cell(s.time_ratio, 3) << " | " << Cell(d.length, 5) << " | "
+      << (shipped ? Cell(shipped->length, 5) + " (" + Certified(*shipped) + ")" : "-") << " | "
+      << (best ? Cell(best->length, 5) : "-") << " | **" << Cell(s.shipped_length_ratio, 4)
+      << "** | " << Cell(s.length_ratio, 4) << " |\n";
+    for (auto [value, into] :
+         {std::pair{s.shipped_time_ratio, &shipped_time},
+          std::pair{s.shipped_length_ratio, &shipped_length}, std::pair{s.time_ratio, &best_time},
+          std::pair{s.length_ratio, &best_length}}) {
+      if (!std::isnan(value)) into->push_back(value);
+    }
+  }
+  o << "| median | | | **" << Cell(Median(shipped_time), 3) << "** | | "
+    << Cell(Median(best_time), 3) << " | | | | **" << Cell(Median(shipped_length), 4) << "** | "
+    << Cell(Median(best_length), 4) << " |\n\n";
+}
+
 std::string Markdown(const std::vector<SceneResult>& scenes, const std::string& command, int runs) {
   std::ostringstream o;
   o << "Medians of " << runs << " interleaved runs. `" << command << "`\n\n"
     << "Length and clearance of each output are from our certified CheckPaths; *cert.* = every "
        "run's output certified. *checks* = collision checks + distance queries; *limit* = checks "
-       "/ checks to certify the output path alone. hgraph runs on all cores, OMPL on one.\n\n";
+       "/ checks to certify the output path alone. hgraph runs on all cores, OMPL on one. *OMPL "
+       "as shipped*: OMPL's hybridize + simplifyMax with its own DiscreteMotionValidator at the "
+       "same resolution (states at the resolution's steps only), timed without any "
+       "certification, its output judged by CheckPaths afterwards; of its two rows, the one whose "
+       "certified twin is shorter (*headline*). Its edges are not counted (OMPL's validator "
+       "never asks our checker for one).\n\n";
+  Headline(scenes, o);
   for (const SceneResult& s : scenes) {
     o << "**" << s.name << "** (" << s.inputs << " PRM inputs, best input length "
       << Cell(*std::min_element(s.input_lengths.begin(), s.input_lengths.end())) << "): defaults / "
-      << "best certified OMPL = " << Cell(s.length_ratio, 4) << " in length, "
+      << "OMPL as shipped = " << Cell(s.shipped_length_ratio, 4) << " in length, "
+      << Cell(s.shipped_time_ratio, 3)
+      << " in time; defaults / best certified OMPL = " << Cell(s.length_ratio, 4) << " in length, "
       << Cell(s.time_ratio, 3) << " in time\n\n"
       << "| method | length | objective | min cl. | cert. | ms | coll. checks | dist. queries | "
          "edges | rounds | limit |\n|---|---|---|---|---|---|---|---|---|---|---|\n";
@@ -470,12 +583,13 @@ std::string Markdown(const std::vector<SceneResult>& scenes, const std::string& 
         o << "| " << m.label << " | failed: " << m.error << " |||||||||\n";
         continue;
       }
-      o << "| " << m.label << (static_cast<int>(i) == s.best_ompl ? " (best OMPL)" : "") << " | "
-        << Cell(m.length, 5) << " | " << Cell(m.objective, 5) << " | " << Cell(m.min_clearance, 3)
-        << " | " << (m.certified ? "yes" : "no") << " | " << Cell(m.ms, 4) << " | "
-        << Cell(m.collision_checks, 8) << " | " << Cell(m.distance_queries, 8) << " | "
-        << Cell(m.edges_checked, 8) << " | " << Cell(m.search_rounds, 8) << " | "
-        << Cell(m.limit_ratio, 3) << " |\n";
+      const int index = static_cast<int>(i);
+      o << "| " << m.label << (index == s.best_ompl ? " (best OMPL)" : "")
+        << (index == s.shipped ? " (headline)" : "") << " | " << Cell(m.length, 5) << " | "
+        << Cell(m.objective, 5) << " | " << Cell(m.min_clearance, 3) << " | " << Certified(m)
+        << " | " << Cell(m.ms, 4) << " | " << Cell(m.collision_checks, 8) << " | "
+        << Cell(m.distance_queries, 8) << " | " << Cell(m.edges_checked, 8) << " | "
+        << Cell(m.search_rounds, 8) << " | " << Cell(m.limit_ratio, 3) << " |\n";
     }
     o << "\n";
   }
@@ -485,11 +599,13 @@ std::string Markdown(const std::vector<SceneResult>& scenes, const std::string& 
 // Two panels, one group of bars per scene: each length-method's length and time relative to the
 // best certified OMPL pipeline (1 = equal), on a log2 scale around 1.
 std::string Svg(const std::vector<SceneResult>& scenes) {
-  const std::vector<std::string> colors = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd",
-                                           "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22"};
+  const std::vector<std::string> colors = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728",
+                                           "#9467bd", "#8c564b", "#e377c2", "#7f7f7f",
+                                           "#bcbd22", "#17becf", "#aec7e8", "#ffbb78"};
   // The length methods; the inverse-clearance pair is not compared.
   const int kMethods = static_cast<int>(colors.size());
-  const double group_w = 200, bar_w = 20, left = 60, panel_h = 220, top = 40, legend_h = 190;
+  const double bar_w = 20, group_w = bar_w * kMethods + 20, left = 60, panel_h = 220, top = 40,
+               legend_h = 18 * kMethods + 30;
   const double width = left + group_w * scenes.size() + 20;
   const double height = top + 2 * (panel_h + 40) + legend_h;
   std::ostringstream o;
@@ -564,8 +680,8 @@ int Main(int argc, char** argv) {
   uint64_t seed = 1;
   std::string out = "bench-out";
   app.add_option("--scenes", scene_names,
-                 "scene names (built-in, wall_planar, hole_wall, "
-                 "two_slots) or scene files");
+                 "scene names (built-in, wall_planar, or a folder of tests/bench/scenes: "
+                 "hole_wall, two_slots, home, office, twisty, car_maze) or scene files");
   app.add_option("--runs", runs, "repetitions per method (medians)")->check(CLI::PositiveNumber);
   app.add_option("--inputs", count, "PRM input paths per scene")->check(CLI::Range(1, 20));
   app.add_option("--plan-time", plan_time_s, "PRM budget per input path, seconds");

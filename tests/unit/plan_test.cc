@@ -1,5 +1,6 @@
 // OMPL's planners and baselines on a real scene (the built-in maze), checked with our own local
-// planner.
+// planner; OMPL's pipeline as shipped (its discrete motion validator) on a wall thinner than a
+// step.
 #include "core/plan/plan.h"
 
 #include <gtest/gtest.h>
@@ -19,6 +20,7 @@
 #include "core/adapter/scene_proto.h"
 #include "core/collision/collision_world.h"
 #include "core/common/error.h"
+#include "core/merge/path_check.h"
 #include "core/motion/local_planner.h"
 #include "core/plan/baselines.h"
 
@@ -398,6 +400,65 @@ TEST(BuiltInScenesTest, PRMSolvesEveryScene) {
     ExpectValid(*f.planner, result.paths[0]);
     std::printf("%s: PRM found a path in %.1f ms\n", name.c_str(), result.attempts[0].elapsed_ms);
   }
+}
+
+// Counts the motions asked of the checker, answering as `inner` does.
+class CountingChecker final : public MotionChecker {
+ public:
+  explicit CountingChecker(const MotionChecker& inner) : inner_(inner) {}
+  const Space& space() const override { return inner_.space(); }
+  EdgeReport CheckEdge(const EdgeCheckRequest& request) const override {
+    ++edges_;
+    return inner_.CheckEdge(request);
+  }
+  bool IsValid(const Config& q) const override { return inner_.IsValid(q); }
+  double Clearance(const Config& q) const override { return inner_.Clearance(q); }
+  int64_t total_collision_checks() const override { return inner_.total_collision_checks(); }
+  int64_t total_distance_queries() const override { return inner_.total_distance_queries(); }
+  int64_t edges() const { return edges_; }
+
+ private:
+  const MotionChecker& inner_;
+  mutable std::atomic<int64_t> edges_{0};
+};
+
+// OMPL as shipped (OmplMotionCheck::kDiscrete) checks the states at the resolution's steps only:
+// simplifyMax then takes a shortcut straight through a wall thinner than a step, which CheckPaths
+// finds in collision, and never asks our checker for a motion. The certified check keeps the
+// detour over the wall.
+TEST(OmplAsShippedTest, DiscreteChecksCrossAWallThinnerThanAStep) {
+  // A point robot in [0, 10]^2 (extent 10 sqrt 2: a step of 0.707 at resolution 0.05) and a wall
+  // 0.02 thick at x = 5 from y = 0 to 9.
+  auto scene = std::make_shared<Scene>(Scene{
+      .name = "thin wall",
+      .space = Space::RealVector(Eigen::Vector2d(0, 0), Eigen::Vector2d(10, 10)),
+  });
+  Obstacle wall{.name = "wall",
+                .shape = Shape{.type = ShapeType::kBox, .box_size = Eigen::Vector3d(0.02, 9, 1)}};
+  wall.pose.translation() = Eigen::Vector3d(5, 4.5, 0);
+  scene->obstacles.push_back(wall);
+  scene->robot.push_back(RobotBody{.shape = Shape{.type = ShapeType::kSphere, .radius = 0}});
+  const double resolution = 0.05;
+  const LocalPlanner planner(std::make_shared<CollisionWorld>(scene), {.resolution = resolution});
+  // Over the wall's end; the straight motion from (1, 1) to (9.5, 1) has its samples at
+  // x = 1 + 8.5 i / 13, none of them inside the wall.
+  const InputPath detour{
+      .name = "detour",
+      .waypoints = {Eigen::Vector2d(1, 1), Eigen::Vector2d(5, 9.5), Eigen::Vector2d(9.5, 1)}};
+  ASSERT_TRUE(CheckPaths(planner, {.paths = {detour}}).paths[0].valid);
+
+  const CountingChecker counting(planner);
+  const InputPath shipped = SimplifyMaxPath(
+      counting, detour, {.resolution = resolution, .motion_check = OmplMotionCheck::kDiscrete});
+  EXPECT_EQ(counting.edges(), 0);
+  const InputPath certified = SimplifyMaxPath(planner, detour, {.resolution = resolution});
+
+  const PathCheckResult check = CheckPaths(planner, {.paths = {shipped, certified}});
+  EXPECT_FALSE(check.paths[0].valid);
+  EXPECT_EQ(check.paths[0].invalid_cause, InvalidCause::kCollision);
+  EXPECT_TRUE(check.paths[1].valid);
+  EXPECT_TRUE(check.paths[1].certified);
+  EXPECT_LT(Length(scene->space, shipped), Length(scene->space, certified));
 }
 
 }  // namespace
