@@ -313,6 +313,8 @@ double CollisionContext::Clearance(const Config& q, ClearanceWitness* witness) {
   DistanceData& data = impl_->distance;
   data.min_distance = std::numeric_limits<double>::infinity();
   data.request.enable_nearest_points = witness != nullptr;
+  data.request.rel_err = 0;
+  data.request.abs_err = 0;
   // Which bodies the nearest points found last belong to (-1: an obstacle).
   int near_body = -1;
   int near_other = -1;
@@ -348,6 +350,35 @@ double CollisionContext::Clearance(const Config& q, ClearanceWitness* witness) {
   return data.min_distance;
 }
 
+double CollisionContext::ClearanceLowerBound(const Config& q, double rel_err, double cap) {
+  HGRAPH_CHECK(rel_err >= 0 && cap > 0);
+  ++distance_queries_;
+  if (!world_.space().InBounds(q)) return 0.0;
+  PlaceBodies(world_, impl_->bodies, q);
+  const CollisionWorld::Impl& w = world_.impl();
+  DistanceData& data = impl_->distance;
+  const double scale = 1 + rel_err;
+  // Every distance FCL reports from here on is an actual one (at least the clearance) or the
+  // start; what it pruned was at least 1 / scale of the running minimum. The absolute error
+  // plays no part (FCL prunes when both tests pass).
+  data.min_distance = cap * scale;
+  data.request.enable_nearest_points = false;
+  data.request.rel_err = rel_err;
+  data.request.abs_err = std::numeric_limits<double>::infinity();
+  data.found = false;
+  for (const auto& body : impl_->bodies) {
+    data.body = body.get();
+    w.obstacle_manager.distance(body.get(), &data, DistanceCallback);
+    if (data.min_distance <= 0) return 0.0;
+  }
+  for (const auto& [i, j] : w.self_pairs) {
+    data.min_distance = PairDistance(impl_->bodies[i].get(), impl_->bodies[j].get(), data.request,
+                                     data.min_distance);
+    if (data.min_distance <= 0) return 0.0;
+  }
+  return std::min(cap, data.min_distance / scale);
+}
+
 double CollisionContext::ObstacleDistance(const Eigen::Vector3d& point) {
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
   pose.translation() = point;
@@ -355,6 +386,8 @@ double CollisionContext::ObstacleDistance(const Eigen::Vector3d& point) {
   DistanceData& data = impl_->distance;
   data.min_distance = std::numeric_limits<double>::infinity();
   data.request.enable_nearest_points = false;
+  data.request.rel_err = 0;
+  data.request.abs_err = 0;
   data.body = impl_->point.get();
   data.found = false;
   world_.impl().obstacle_manager.distance(impl_->point.get(), &data, DistanceCallback);

@@ -78,6 +78,16 @@ class CollisionContext {
   // the robot is in contact or out of bounds).
   double Clearance(const Config& q, ClearanceWitness* witness = nullptr);
 
+  // A lower bound on Clearance(q) that FCL finds with less work: its traversals prune every pair
+  // of bounding volumes that could not bring the distance below 1 + rel_err times the nearest
+  // found so far (DistanceRequest::rel_err), and start from cap * (1 + rel_err) instead of
+  // infinity, so that a robot far from everything costs a few volume tests. Returns L with
+  //   min(Clearance(q) / (1 + rel_err), cap) <= L <= min(Clearance(q), cap),
+  // and L = 0 exactly when Clearance(q) = 0 (contact or out of bounds): a pair in contact has
+  // volumes at distance 0, which are never pruned. rel_err >= 0, cap > 0. Counts one distance
+  // query.
+  double ClearanceLowerBound(const Config& q, double rel_err, double cap);
+
   // Distance from a world point to the nearest obstacle (mesh surfaces, solid primitives; 0 on or
   // inside a primitive); +infinity without obstacles. The robot plays no part, and no query is
   // counted: core/distance samples the static world with it once per scene, beside the

@@ -75,7 +75,7 @@ class EdgeCheck {
   EdgeCheck(const Space& space, const std::vector<int>& body_component,
             const std::vector<double>& body_radius, CollisionContext& context, const Config& from,
             const Config& to, const CancelToken* cancel, const ClearanceBound* bound = nullptr,
-            std::atomic<int64_t>* bound_total = nullptr)
+            std::atomic<int64_t>* bound_total = nullptr, double rel_err = 0)
       : space_(space),
         body_component_(body_component),
         body_radius_(body_radius),
@@ -84,7 +84,8 @@ class EdgeCheck {
         to_(to),
         cancel_(cancel),
         bound_(bound),
-        bound_total_(bound_total) {}
+        bound_total_(bound_total),
+        rel_err_(rel_err) {}
   ~EdgeCheck() {
     if (bound_total_ != nullptr) *bound_total_ += bound_queries_;
   }
@@ -104,6 +105,13 @@ class EdgeCheck {
       ++bound_queries_;
       const double lower = bound_->LowerBound(q);
       if (lower > 0) return Bounded{.t = t, .clearance = lower, .exact = false};
+    }
+    if (rel_err_ > 0 && whole_bound_ > 0) {
+      // FCL's early stop: 0 only in contact, so a 0 is exact. Past the cap a sample certifies
+      // the whole motion on its own, so nothing beyond it is worth measuring.
+      const double cap = kCapMargin * whole_bound_ * std::max(t, 1 - t);
+      const double lower = context_.ClearanceLowerBound(q, rel_err_, cap);
+      return Bounded{.t = t, .clearance = lower, .exact = lower <= 0};
     }
     return Bounded{.t = t, .clearance = context_.Clearance(q), .exact = true};
   }
@@ -209,6 +217,7 @@ class EdgeCheck {
   // advancing by c / bound from each sample.
   Advanced Advance(int segments) {
     const double bound = MotionBound(from_, to_);
+    whole_bound_ = bound;
     const double finest =
         1.0 / (static_cast<double>(segments) * (1 << LocalPlanner::kMaxRefineDepth));
     constexpr double kMargin = 0.999;
@@ -289,6 +298,11 @@ class EdgeCheck {
   const CancelToken* cancel_;
   const ClearanceBound* bound_;
   std::atomic<int64_t>* bound_total_;
+  const double rel_err_;
+  double whole_bound_ = 0;  // the motion bound of the whole edge (Advance)
+  // A sample with the motion bound of the whole edge, times max(t, 1 - t), as clearance covers
+  // it alone with advancement's margin (0.999) to spare.
+  static constexpr double kCapMargin = 1.01;
   static constexpr int64_t kCancelStride = 256;
   bool certified_ = true;
   double invalid_at_ = -1;
@@ -306,6 +320,10 @@ LocalPlanner::LocalPlanner(std::shared_ptr<const CollisionWorld> world, LocalPla
   if (!std::isfinite(options_.resolution) || options_.resolution <= 0) {
     throw InputError("resolution",
                      "must be positive and finite, got " + std::to_string(options_.resolution));
+  }
+  if (!std::isfinite(options_.certificate_rel_err) || options_.certificate_rel_err < 0) {
+    throw InputError("certificate_rel_err",
+                     "must be >= 0 and finite, got " + limits::Num(options_.certificate_rel_err));
   }
   const Scene& scene = world_->scene();
   for (size_t i = 0; i < scene.robot.size(); ++i) {
@@ -380,7 +398,8 @@ EdgeReport LocalPlanner::CheckEdge(const EdgeCheckRequest& request) const {
   if (request.proof == EdgeProof::kSamples) return finish();
   if (request.proof != EdgeProof::kProfile) {
     EdgeCheck advance(s, impl_->body_component, impl_->body_radius, context, from, to,
-                      request.cancel, options_.clearance_bound.get(), &impl_->bound_queries);
+                      request.cancel, options_.clearance_bound.get(), &impl_->bound_queries,
+                      options_.certificate_rel_err);
     const EdgeCheck::Advanced advanced = advance.Advance(segments);
     if (advanced.invalid_at >= 0) return invalid(advanced.invalid_at);
     if (advanced.certified) {

@@ -42,6 +42,11 @@ struct LocalPlannerOptions {
   // Asked before the exact distance where a certificate needs only a lower bound (see above);
   // null: exact distances only. From BuildClearanceBound of the same world.
   std::shared_ptr<const ClearanceBound> clearance_bound;
+  // Where a certificate needs only a lower bound and the clearance bound above gives none, FCL's
+  // distance with this relative error (CollisionContext::ClearanceLowerBound, capped at the
+  // clearance that would certify the whole motion from the sample): a bound at least
+  // 1 / (1 + rel) of the exact distance, found with fewer triangle pairs. 0: exact distances.
+  double certificate_rel_err = 0;
 };
 
 // The clearance bound of a world (a distance field sampled on `threads` threads, 0: all cores,

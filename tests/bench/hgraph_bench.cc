@@ -16,6 +16,7 @@
 #include <functional>
 #include <iostream>
 #include <iterator>
+#include <map>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -84,6 +85,8 @@ struct Problem {
   // Exact clearances (the defaults), and with the scene's clearance bound where it gets one.
   std::unique_ptr<LocalPlanner> planner;
   std::unique_ptr<LocalPlanner> bound_planner;
+  // Planners whose certificates take FCL's early-stopped distance (certificate_rel_err).
+  std::map<double, std::unique_ptr<LocalPlanner>> rel_planners;
   double resolution = 0.01;
   std::vector<InputPath> inputs;
   std::vector<double> input_lengths;
@@ -99,11 +102,15 @@ struct Output {
   int64_t engine_edges_checked = -1;
 };
 
+// The relative errors of FCL's early-stopped distance the bench compares with exact certificates.
+constexpr double kCertificateRelErrs[] = {0.1, 0.25, 0.5};
+
 struct Method {
   std::string name;
   std::string label;             // for tables and the chart
   bool ompl = false;             // counts towards "best certified OMPL"
   bool clearance_bound = false;  // runs on Problem::bound_planner
+  double rel_err = 0;            // > 0: runs on Problem::rel_planners[rel_err]
   // OMPL's pipeline as OMPL ships it (its DiscreteMotionValidator): the name of the certified
   // OMPL method that runs the same pipeline on our checker; empty for every other method.
   std::string shipped_twin;
@@ -200,7 +207,9 @@ Summary Summarize(const Method& m, const std::vector<Run>& runs) {
 
 Run RunOnce(const Method& m, const Problem& p, double k) {
   Run r;
-  const LocalPlanner& planner = m.clearance_bound ? *p.bound_planner : *p.planner;
+  const LocalPlanner& planner = m.clearance_bound ? *p.bound_planner
+                                : m.rel_err > 0   ? *p.rel_planners.at(m.rel_err)
+                                                  : *p.planner;
   CountingChecker counter(planner);
   const int64_t cc0 = planner.total_collision_checks();
   const int64_t dq0 = planner.total_distance_queries();
@@ -277,6 +286,15 @@ std::vector<Method> Methods(const Problem& p, bool inverse_clearance_pair, uint6
       HgraphMethod("hgraph-clearance-bound", "hgraph defaults + --clearance-bound", {}, {});
   bounded.clearance_bound = true;
   m.push_back(std::move(bounded));
+  // The defaults with certificates on FCL's early-stopped distance: what each error gains.
+  for (double rel : kCertificateRelErrs) {
+    std::ostringstream name;
+    name << rel;
+    Method early = HgraphMethod("hgraph-rel-err-" + name.str(),
+                                "hgraph defaults, certificate rel_err " + name.str(), {}, {});
+    early.rel_err = rel;
+    m.push_back(std::move(early));
+  }
   m.push_back(HgraphMethod("hgraph-eager-all-pairs", "hgraph eager all-pairs", {},
                            MergeOptions{.candidates = {.variant = Variant::kAllPairs},
                                         .evaluation = Evaluation::kEager}));
@@ -363,6 +381,10 @@ Problem LoadProblem(const std::string& name, const std::string& file, const fs::
       std::make_unique<LocalPlanner>(p.world, LocalPlannerOptions{.resolution = p.resolution});
   p.bound_planner = std::make_unique<LocalPlanner>(
       p.world, LocalPlannerOptions{.resolution = p.resolution, .clearance_bound = bound});
+  for (double rel : kCertificateRelErrs) {
+    p.rel_planners[rel] = std::make_unique<LocalPlanner>(
+        p.world, LocalPlannerOptions{.resolution = p.resolution, .certificate_rel_err = rel});
+  }
   const fs::path inputs_file = out_dir / "inputs" / (name + ".json");
   if (fs::exists(inputs_file)) {
     p.inputs = LoadPathsFile(inputs_file.string(), p.scene->space);

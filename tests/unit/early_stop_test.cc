@@ -1,0 +1,163 @@
+// FCL's early-stopped distance as a certified lower bound on clearance
+// (CollisionContext::ClearanceLowerBound, LocalPlannerOptions::certificate_rel_err), on the mesh
+// scenes with real FCL: it stays within its stated bracket of the exact clearance, is 0 exactly
+// in contact, and the certificates taken with it are certificates with exact clearances.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <limits>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "core/adapter/path_io.h"
+#include "core/adapter/scene_proto.h"
+#include "core/collision/collision_world.h"
+#include "core/common/error.h"
+#include "core/merge/merge.h"
+#include "core/merge/path_check.h"
+#include "core/motion/local_planner.h"
+#include "core/path/path.h"
+
+namespace hgraph {
+namespace {
+
+const std::string kRoot = HGRAPH_SOURCE_DIR;
+
+struct MeshProblem {
+  std::string name;
+  std::string file;
+};
+
+// Meshes from a few dozen triangles (the bench's walls) to OMPL.app's size (the home), SE(2)
+// and SE(3), one with self-collision.
+std::vector<MeshProblem> MeshProblems() {
+  return {{"hole_wall", kRoot + "/tests/bench/scenes/hole_wall/scene.json"},
+          {"double_wrench", kRoot + "/scenes/double_wrench/scene.json"},
+          {"car_planar", kRoot + "/tests/data/ompl_app_car/car_planar.cfg"},
+          {"home", kRoot + "/tests/bench/scenes/home/scene.json"},
+          {"car_maze", kRoot + "/tests/bench/scenes/car_maze/scene.json"}};
+}
+
+std::shared_ptr<const CollisionWorld> LoadWorld(const MeshProblem& p) {
+  return std::make_shared<const CollisionWorld>(LoadSceneFile(p.file));
+}
+
+// min(exact / (1 + rel), cap) <= bound <= min(exact, cap), and 0 exactly in contact, for random
+// states (most of them in contact or near it) and for caps below and above the clearance.
+TEST(EarlyStopTest, TheBoundStaysWithinItsBracket) {
+  constexpr double kTolerance = 1e-9;
+  for (const MeshProblem& p : MeshProblems()) {
+    SCOPED_TRACE(p.name);
+    const auto world = LoadWorld(p);
+    auto exact_context = world->MakeContext();
+    auto context = world->MakeContext();
+    std::mt19937_64 rng(7);
+    int free = 0;
+    int loose = 0;  // free states where the bound is below the exact clearance
+    for (int i = 0; i < 400; ++i) {
+      const Config q = world->space().Sample(rng);
+      const double exact = exact_context->Clearance(q);
+      for (const double rel : {0.1, 0.5}) {
+        for (const double cap : {1e9, 0.5 * exact + 1e-3}) {
+          const double lower = context->ClearanceLowerBound(q, rel, cap);
+          ASSERT_EQ(lower == 0, exact == 0) << "state " << i << " exact " << exact;
+          EXPECT_LE(lower, std::min(exact, cap) * (1 + kTolerance)) << "state " << i;
+          EXPECT_GE(lower, std::min(exact / (1 + rel), cap) * (1 - kTolerance)) << "state " << i;
+          if (exact > 0 && cap == 1e9 && lower < exact * (1 - kTolerance)) ++loose;
+        }
+      }
+      if (exact > 0) ++free;
+    }
+    ASSERT_GT(free, 20);
+    EXPECT_EQ(context->distance_queries(), 400 * 4);
+    std::printf("%s: %d free states of 400, bound below the exact clearance in %d of %d\n",
+                p.name.c_str(), free, loose, 2 * free);
+  }
+}
+
+// Certificates on the early-stopped bound are certificates: what it certifies has an exact
+// certified profile, what it finds in collision collides.
+TEST(EarlyStopTest, CertificatesOnTheBoundAreExactCertificates) {
+  for (const MeshProblem& p : MeshProblems()) {
+    SCOPED_TRACE(p.name);
+    const auto world = LoadWorld(p);
+    const LocalPlanner exact(world);
+    const LocalPlanner early(world, {.certificate_rel_err = 0.25});
+    std::mt19937_64 rng(11);
+    std::vector<Config> free;
+    while (free.size() < 40) {
+      const Config q = world->space().Sample(rng);
+      if (exact.Clearance(q) > 0) free.push_back(q);
+    }
+    int certified = 0;
+    int certified_exactly = 0;
+    for (size_t i = 0; i + 1 < free.size(); ++i) {
+      // Short motions (a tenth of the way to the next state) are mostly free; long ones mostly
+      // collide.
+      const Config to = world->space().Interpolate(free[i], free[i + 1], i % 2 ? 0.1 : 1.0);
+      for (const EdgeProof mode : {EdgeProof::kCertificate, EdgeProof::kCertificateOrGiveUp}) {
+        const EdgeCheckRequest request{.from = &free[i], .to = &to, .proof = mode};
+        const EdgeReport with = early.CheckEdge(request);
+        const EdgeReport without = exact.CheckEdge(request);
+        const EdgeReport profile =
+            exact.CheckEdge({.from = &free[i], .to = &to, .proof = EdgeProof::kProfile});
+        if (with.state == EdgeState::kInvalid) {
+          EXPECT_EQ(profile.state, EdgeState::kInvalid) << "motion " << i;
+        }
+        if (with.certified) {
+          ++certified;
+          EXPECT_EQ(with.state, EdgeState::kValid);
+          EXPECT_TRUE(profile.certified) << "motion " << i;
+        }
+        if (without.certified) ++certified_exactly;
+      }
+    }
+    // As many certificates as exact distances give, give or take a stalled halving.
+    EXPECT_GT(certified, 5);
+    EXPECT_GE(certified, certified_exactly * 9 / 10);
+    std::printf("%s: %d certified with the early stop, %d with exact distances\n", p.name.c_str(),
+                certified, certified_exactly);
+  }
+}
+
+// A default merge of the bench's fixed home inputs on a checker whose certificates take the
+// early-stopped bound: its path passes CheckPaths on an exact checker, certified, and is as
+// short as the exact checker's to within the post-optimization's randomness.
+TEST(EarlyStopTest, MergedPathsOnTheBoundAreCertifiedExactly) {
+  const MeshProblem p = MeshProblems()[3];
+  const auto world = LoadWorld(p);
+  const LocalPlanner exact(world);
+  const LocalPlanner early(world, {.certificate_rel_err = 0.25});
+  const std::vector<InputPath> inputs =
+      LoadPathsFile(kRoot + "/tests/bench/results/real/inputs/home.json", world->space());
+  const MergeResult merged = Merge(early, MergeRequest{.paths = inputs});
+  const PathCheckResult check = CheckPaths(exact, PathCheckRequest{.paths = {merged.path}});
+  ASSERT_EQ(check.paths.size(), 1u);
+  EXPECT_TRUE(check.paths[0].valid) << check.paths[0].invalid_reason;
+  EXPECT_TRUE(check.paths[0].certified);
+  EXPECT_EQ(merged.path.waypoints.front(), inputs[0].waypoints.front());
+  EXPECT_EQ(merged.path.waypoints.back(), inputs[0].waypoints.back());
+  double best_input = std::numeric_limits<double>::infinity();
+  for (const InputPath& input : inputs) {
+    best_input = std::min(best_input, PathLength(world->space(), input));
+  }
+  EXPECT_LE(merged.quality.length, best_input);
+}
+
+TEST(EarlyStopTest, OptionsAreChecked) {
+  const auto world = LoadWorld(MeshProblems()[0]);
+  for (const double bad :
+       {-0.1, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity()}) {
+    try {
+      LocalPlanner planner(world, {.certificate_rel_err = bad});
+      ADD_FAILURE() << bad << " accepted";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.field(), "certificate_rel_err");
+    }
+  }
+}
+
+}  // namespace
+}  // namespace hgraph
