@@ -345,10 +345,10 @@ TEST(MergeMeshTest, PartialShortcutsKeepTheInvariants) {
 }
 
 // Restarts (MergeOptions::optimize_restarts) on the mesh problems, stopped by the automatic
-// budget's rounds, never the clock: none gives the default merge's path; two keep the invariants (certified, the endpoints,
-// never worse than without them, under length and safe length) and give the same path on one
-// thread as on two (the count, not the machine, decides); on the rod through the holed wall
-// they lead out of the defaults' local optimum into a shorter one.
+// budget's rounds, never the clock: none gives the default merge's path; two keep the invariants
+// (certified, the endpoints, never worse than without them, under length and safe length) and give
+// the same path on one thread as on two (the count, not the machine, decides); on the rod through
+// the holed wall they lead out of the defaults' local optimum into a shorter one.
 TEST(MergeMeshTest, RestartsKeepTheInvariantsAndLeaveALocalOptimum) {
   bool left_an_optimum = false;
   ForMeshProblems([&](const LocalPlanner& planner, const std::vector<InputPath>& inputs) {
