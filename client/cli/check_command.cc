@@ -6,6 +6,7 @@
 #include "client/cli/cli_common.h"
 #include "client/cli/command.h"
 #include "client/cli/remote.h"
+#include "client/cli/request_flags.h"
 #include "core/adapter/merge_proto.h"
 #include "core/adapter/path_io.h"
 #include "core/adapter/scene_proto.h"
@@ -16,22 +17,22 @@ namespace {
 struct CheckFlags {
   std::string scene;
   std::string paths;
-  double resolution = 0;
   bool sampled = false;
-  CLI::Option* resolution_opt = nullptr;
+  // --resolution, read as a merge reads options.resolution.
+  RequestFlags<v1::MergeOptions> options;
 };
 
 int RunCheck(const CheckFlags& f, PathChecker checker) {
   v1::Scene scene_proto = ReadSceneFile(f.scene);
   // The same rule and messages as a merge: the flag, else the scene's, else the default.
   v1::MergeOptions options;
-  if (f.resolution_opt->count() > 0) options.set_resolution(f.resolution);
+  f.options.Apply(options);
   CheckSettings settings{.mode = f.sampled ? CheckMode::kSampled : CheckMode::kCertified};
   try {
     const double resolution = ResolutionFromProto(options, scene_proto);
     if (options.has_resolution()) settings.resolution = resolution;
   } catch (const Error& e) {
-    RethrowWithFlag(e, {{"options.resolution", "--resolution"}});
+    f.options.Rethrow(e);
   }
   const Space space = SpaceFromProto(scene_proto.space(), "scene.space");
   const std::vector<InputPath> paths = LoadPathsFile(f.paths, space);
@@ -53,9 +54,10 @@ Subcommand AddCheckCommand(CLI::App& parent) {
   app->add_option("--scene", f.scene, "Scene JSON (hgraph.v1.Scene) or OMPL.app problem (.cfg)")
       ->required();
   app->add_option("--paths", f.paths, "Paths: PathSet JSON or OMPL text")->required();
-  f.resolution_opt = app->add_option(
-      "--resolution", f.resolution,
-      "Local-planner resolution, fraction of the space's extent (default: the scene's, or 0.01)");
+  f.options.Add<double>(
+      app, "--resolution",
+      "Local-planner resolution, fraction of the space's extent (default: the scene's, or 0.01)",
+      "options.resolution", [](v1::MergeOptions& o, const double& v) { o.set_resolution(v); });
   app->add_flag("--sampled", f.sampled,
                 "Only the collision test at the resolution's samples (faster; may accept an edge "
                 "that grazes an obstacle between two samples, which a merge rejects)");

@@ -259,15 +259,16 @@ void MeasureFlags::Add(CLI::App* app) {
   app->add_option("--measure", measure,
                   "Quality measure: length, inverse-clearance, bottleneck-clearance, safe-length")
       ->capture_default_str();
-  k_opt = app->add_option("--k", k, "Inverse-clearance exponent (default 3)");
-  app->add_option("--safety", safety, "Minimum clearance C for safe-length");
+  fields.Add<double>(app, "--k", "Inverse-clearance exponent (default 3)", "measure.k",
+                     [](v1::Measure& m, const double& k) { m.set_k(k); });
+  fields.Add<double>(app, "--safety", "Minimum clearance C for safe-length", "measure.safety",
+                     [](v1::Measure& m, const double& safety) { m.set_safety(safety); });
 }
 
 v1::Measure MeasureFlags::ToProto() const {
   v1::Measure proto = MeasureToProto(MeasureSpec{.type = ParseMeasureType(measure, "--measure")});
   proto.clear_k();
-  if (k_opt->count() > 0) proto.set_k(k);
-  proto.set_safety(safety);
+  fields.Apply(proto);
   return proto;
 }
 

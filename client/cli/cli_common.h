@@ -9,6 +9,7 @@
 #include <string>
 
 #include "client/cli/command.h"
+#include "client/cli/request_flags.h"
 #include "core/collision/collision_world.h"
 #include "core/common/error.h"
 #include "core/common/progress.h"
@@ -71,21 +72,15 @@ class ProgressPrinter {
   bool line_open_ = false;
 };
 
-// Rethrows an InputError about a proto field set from a flag so that it names both
-// ("measure.k (--k)"); other errors are rethrown unchanged. Call only from a catch block.
-[[noreturn]] void RethrowWithFlag(const Error& e, const std::map<std::string, std::string>& flags);
-
 // The human table of a merge: every input and the merged path under every measure, invalid
 // inputs' first bad edge, the objective against the best input, stats and per-phase timing.
 void PrintMergeTable(const MergeResult& result);
 
 // --measure, --k and --safety, as merge and requery take them. Unset --k leaves measure.k unset
-// (the engine's default).
+// (the engine's default). Not copyable.
 struct MeasureFlags {
   std::string measure = "length";
-  double k = 0;
-  double safety = 0;
-  CLI::Option* k_opt = nullptr;
+  RequestFlags<v1::Measure> fields;  // --k, --safety
 
   void Add(CLI::App* app);
   // Throws InputError naming the flag.

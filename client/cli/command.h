@@ -64,6 +64,9 @@ struct Subcommand {
   // codes as `run`, with the engine work done by the service (WithServer in remote.h calls it
   // when --server is given).
   std::function<int(const RemoteOptions&)> run_remote;
+  // Where -q/--quiet goes, for a subcommand that prints progress (main() registers the flag on
+  // every subcommand); nullptr for one that prints none.
+  bool* quiet = nullptr;
 };
 
 Subcommand AddMergeCommand(CLI::App& parent);

@@ -104,11 +104,9 @@ Subcommand AddHealthCommand(CLI::App& parent) {
       "health", "Ask hgraph-server's gRPC health service whether it serves (exit 0 if SERVING)");
   auto remote = std::make_shared<RemoteOptions>(RemoteOptions{.timeout_s = 5.0});
   auto service = std::make_shared<std::string>();
-  app->add_option("--server", remote->server, "hgraph-server at HOST:PORT")->required();
+  AddServerFlags(app, remote.get(), ServerFlag::kRequired);
   app->add_option("--service", *service,
                   "service name to ask about (empty = the whole server; or hgraph.v1.PathMerger)");
-  app->add_option("--timeout", remote->timeout_s, "Deadline, seconds")->capture_default_str();
-  AddConnectionFlags(app, remote.get());
   return Subcommand{app, [remote, service] { return CheckHealth(*remote, *service); }};
 }
 

@@ -27,11 +27,10 @@ int main(int argc, char** argv) {
   };
   // -q/--quiet is common to every subcommand, so that a script can pass the same flags to all of
   // them; those with no progress to hide (requery, check, ...) accept it and print as before.
+  bool no_progress_anyway = false;
   for (Subcommand& sub : subcommands) {
-    if (sub.app->get_option_no_throw("--quiet") == nullptr) {
-      sub.app->add_flag("-q,--quiet")
-          ->description("No progress on stderr (this subcommand prints none)");
-    }
+    sub.app->add_flag("-q,--quiet", sub.quiet != nullptr ? *sub.quiet : no_progress_anyway,
+                      "No progress on stderr");
   }
 
   try {

@@ -15,6 +15,7 @@
 #include "client/cli/command.h"
 #include "client/cli/merge_picture.h"
 #include "client/cli/remote.h"
+#include "client/cli/request_flags.h"
 #include "core/adapter/json_io.h"
 #include "core/adapter/merge_proto.h"
 #include "core/adapter/path_io.h"
@@ -35,50 +36,20 @@ struct MergeFlags {
   std::string svg;
   std::string variant = "edit-distance";
   MeasureFlags measure;
-  double radius = 0;
-  int phi = 0;
-  double gap_init = 0;
-  double gap_extend = 0;
-  double resolution = 0;
-  double endpoint_tolerance = 0;
-  double max_node_spacing = 0;
   std::string evaluation = "lazy";
-  double optimize_ms = -1;
-  int optimize_restarts = 0;
   bool report_inputs = false;
   bool report_clearance = false;
   bool partial_shortcuts = false;
   bool best_so_far = false;
-  int threads = 0;
   bool quiet = false;
-  // Set when the flag was given; unset flags leave the proto field unset (core defaults).
-  CLI::Option* radius_opt = nullptr;
-  CLI::Option* phi_opt = nullptr;
-  CLI::Option* gap_init_opt = nullptr;
-  CLI::Option* gap_extend_opt = nullptr;
-  CLI::Option* resolution_opt = nullptr;
-  CLI::Option* endpoint_tolerance_opt = nullptr;
-  CLI::Option* max_node_spacing_opt = nullptr;
-  CLI::Option* optimize_ms_opt = nullptr;
-  CLI::Option* optimize_restarts_opt = nullptr;
+  // The options whose fields stay unset unless their flag is given (core defaults).
+  RequestFlags<v1::MergeOptions> options;
 };
 
-// The proto fields each flag fills, so that errors name the flag as well.
-const std::map<std::string, std::string>& FlagNames() {
-  static const std::map<std::string, std::string> names = {
-      {"measure.k", "--k"},
-      {"measure.safety", "--safety"},
-      {"options.radius", "--radius"},
-      {"options.phi", "--phi"},
-      {"options.gap_init", "--gap-init"},
-      {"options.gap_extend", "--gap-extend"},
-      {"options.resolution", "--resolution"},
-      {"options.threads", "--threads"},
-      {"options.endpoint_tolerance", "--endpoint-tolerance"},
-      {"options.max_node_spacing", "--max-node-spacing"},
-      {"options.optimize_ms", "--optimize-ms"},
-      {"options.optimize_restarts", "--restarts"},
-  };
+// The proto fields the flags fill, so that errors name the flag as well.
+std::map<std::string, std::string> FlagNames(const MergeFlags& f) {
+  std::map<std::string, std::string> names = f.measure.fields.names();
+  names.insert(f.options.names().begin(), f.options.names().end());
   return names;
 }
 
@@ -92,29 +63,18 @@ v1::MergePathsRequest BuildRequest(const MergeFlags& f, const v1::Scene& scene,
     *request.mutable_measure() = f.measure.ToProto();
     v1::MergeOptions* options = request.mutable_options();
     options->set_variant(VariantToProto(ParseVariant(f.variant, "--variant")));
-    if (f.radius_opt->count() > 0) options->set_radius(f.radius);
-    if (f.phi_opt->count() > 0) options->set_phi(f.phi);
-    if (f.gap_init_opt->count() > 0) options->set_gap_init(f.gap_init);
-    if (f.gap_extend_opt->count() > 0) options->set_gap_extend(f.gap_extend);
-    if (f.resolution_opt->count() > 0) options->set_resolution(f.resolution);
-    if (f.endpoint_tolerance_opt->count() > 0) {
-      options->set_endpoint_tolerance(f.endpoint_tolerance);
-    }
-    if (f.max_node_spacing_opt->count() > 0) options->set_max_node_spacing(f.max_node_spacing);
     options->set_evaluation(ParseEvaluation(f.evaluation, "--evaluation") == Evaluation::kEager
                                 ? v1::EVALUATION_EAGER
                                 : v1::EVALUATION_LAZY);
     options->set_report_inputs(f.report_inputs);
     options->set_report_clearance(f.report_clearance);
     options->set_partial_shortcuts(f.partial_shortcuts);
-    if (f.optimize_ms_opt->count() > 0) options->set_optimize_ms(f.optimize_ms);
-    if (f.optimize_restarts_opt->count() > 0) options->set_optimize_restarts(f.optimize_restarts);
-    options->set_threads(f.threads);
+    f.options.Apply(*options);
     MeasureFromProto(request.measure());
     MergeOptionsFromProto(*options);
     *resolution = ResolutionFromProto(*options, scene);
   } catch (const Error& e) {
-    RethrowWithFlag(e, FlagNames());
+    RethrowWithFlag(e, FlagNames(f));
   }
   return request;
 }
@@ -288,40 +248,49 @@ Subcommand AddMergeCommand(CLI::App& parent) {
                   "H-Graph variant: all-pairs, neighborhood, knn, edit-distance, "
                   "edit-distance-neighborhood")
       ->capture_default_str();
-  f.radius_opt = app->add_option("--radius", f.radius,
-                                 "Neighbourhood threshold D (default: 2 x mean input edge length)");
-  f.phi_opt = app->add_option("--phi", f.phi, "Neighbours per node for knn (default 5)");
-  f.gap_init_opt = app->add_option("--gap-init", f.gap_init,
-                                   "Alignment gap opening penalty (default: 2 x gap-extend)");
-  f.gap_extend_opt = app->add_option("--gap-extend", f.gap_extend,
-                                     "Alignment gap extension penalty (default: mean input edge "
-                                     "length)");
+  using Options = v1::MergeOptions;
+  f.options.Add<double>(app, "--radius",
+                        "Neighbourhood threshold D (default: 2 x mean input edge length)",
+                        "options.radius", [](Options& o, const double& v) { o.set_radius(v); });
+  f.options.Add<int>(app, "--phi", "Neighbours per node for knn (default 5)", "options.phi",
+                     [](Options& o, const int& v) { o.set_phi(v); });
+  f.options.Add<double>(app, "--gap-init",
+                        "Alignment gap opening penalty (default: 2 x gap-extend)",
+                        "options.gap_init", [](Options& o, const double& v) { o.set_gap_init(v); });
+  f.options.Add<double>(
+      app, "--gap-extend", "Alignment gap extension penalty (default: mean input edge length)",
+      "options.gap_extend", [](Options& o, const double& v) { o.set_gap_extend(v); });
   f.measure.Add(app);
-  f.resolution_opt = app->add_option(
-      "--resolution", f.resolution,
-      "Local-planner resolution, fraction of the space's extent (default: the scene's, or 0.01)");
-  f.endpoint_tolerance_opt =
-      app->add_option("--endpoint-tolerance", f.endpoint_tolerance,
-                      "Largest distance between inputs' start (goal) waypoints (default 1e-6)");
-  f.max_node_spacing_opt = app->add_option(
-      "--max-node-spacing", f.max_node_spacing,
+  f.options.Add<double>(
+      app, "--resolution",
+      "Local-planner resolution, fraction of the space's extent (default: the scene's, or 0.01)",
+      "options.resolution", [](Options& o, const double& v) { o.set_resolution(v); });
+  f.options.Add<double>(app, "--endpoint-tolerance",
+                        "Largest distance between inputs' start (goal) waypoints (default 1e-6)",
+                        "options.endpoint_tolerance",
+                        [](Options& o, const double& v) { o.set_endpoint_tolerance(v); });
+  f.options.Add<double>(
+      app, "--max-node-spacing",
       "Subdivide input edges longer than this in the H-Graph, so bridges can leave an input "
-      "mid-edge (configuration distance; default 0 = waypoints only)");
+      "mid-edge (configuration distance; default 0 = waypoints only)",
+      "options.max_node_spacing", [](Options& o, const double& v) { o.set_max_node_spacing(v); });
   app->add_option("--evaluation", f.evaluation,
                   "lazy: check only the edges of the paths the search would take; eager: check "
                   "every candidate first")
       ->capture_default_str();
-  f.optimize_ms_opt = app->add_option(
-      "--optimize-ms", f.optimize_ms,
+  f.options.Add<double>(
+      app, "--optimize-ms",
       "Budget of the post-optimization (certified shortcuts re-hybridized, length and "
       "safe-length), ms; 0 = off (default: automatic, until a round gains < 0.1%, at most 100 "
       "rounds: the same answer on any machine); a budget given is spent, on --restarts once the "
-      "rounds stop gaining");
-  f.optimize_restarts_opt = app->add_option(
-      "--restarts", f.optimize_restarts,
+      "rounds stop gaining",
+      "options.optimize_ms", [](Options& o, const double& v) { o.set_optimize_ms(v); });
+  f.options.Add<int>(
+      app, "--restarts",
       "Restarts of the post-optimization from the input paths once its rounds stop gaining, "
       "each about one post-optimization (length, safe-length; default: none, or as many as an "
-      "explicit --optimize-ms allows)");
+      "explicit --optimize-ms allows)",
+      "options.optimize_restarts", [](Options& o, const int& v) { o.set_optimize_restarts(v); });
   app->add_flag("--partial-shortcuts", f.partial_shortcuts,
                 "A quarter of the post-optimization's shortcuts move one part (a translation or "
                 "a rotation) alone: ~1% shorter paths for ~18% more checks");
@@ -336,12 +305,15 @@ Subcommand AddMergeCommand(CLI::App& parent) {
                 "Profile the merged path's clearance for the report under length (the clearance "
                 "measures always do); without it a length merge reports the certified path's "
                 "length only");
-  app->add_option("--threads", f.threads, "Worker threads (0 = all cores)")->capture_default_str();
-  app->add_flag("-q,--quiet", f.quiet, "No progress on stderr");
+  f.options
+      .Add<int>(app, "--threads", "Worker threads (0 = all cores)", "options.threads",
+                [](Options& o, const int& v) { o.set_threads(v); })
+      ->capture_default_str();
   return Subcommand{
       .app = app,
       .run = [flags] { return RunLocal(*flags); },
-      .run_remote = [flags](const RemoteOptions& remote) { return RunRemote(*flags, remote); }};
+      .run_remote = [flags](const RemoteOptions& remote) { return RunRemote(*flags, remote); },
+      .quiet = &f.quiet};
 }
 
 }  // namespace hgraph::cli

@@ -4,12 +4,12 @@
 #include <chrono>
 #include <cstdio>
 #include <functional>
-#include <map>
 #include <string>
 
 #include "client/cli/cli_common.h"
 #include "client/cli/command.h"
 #include "client/cli/remote.h"
+#include "client/cli/request_flags.h"
 #include "core/adapter/path_io.h"
 #include "core/adapter/scene_proto.h"
 #include "core/plan/plan.h"
@@ -26,33 +26,21 @@ struct PlanFlags {
   double time_s = 1.0;
   uint64_t seed = 1;
   bool simplify = false;
-  double resolution = 0;
   bool quiet = false;
-  CLI::Option* resolution_opt = nullptr;
+  // --resolution, and the names of the fields the other flags fill.
+  RequestFlags<v1::PlanPathsRequest> fields;
 };
-
-const std::map<std::string, std::string>& FlagNames() {
-  static const std::map<std::string, std::string> names = {
-      {"planner", "--planner"},
-      {"count", "--count"},
-      {"time_s", "--time"},
-      {"start", "--scene"},
-      {"goal", "--scene"},
-      {"resolution", "--resolution"},
-      {"scene.resolution", "--scene"},
-  };
-  return names;
-}
 
 // The request the service receives (without its session). *resolution gets the resolution the
 // paths are checked at: the flag, else the scene's.
 v1::PlanPathsRequest BuildRequest(const PlanFlags& f, const v1::Scene& scene, double* resolution) {
   v1::PlanPathsRequest request;
+  f.fields.Apply(request);
   try {
     request.set_planner(PlannerTypeName(ParsePlannerType(f.planner, "planner")));
-    *resolution = f.resolution_opt->count() > 0 ? f.resolution : SceneResolution(scene);
+    *resolution = request.has_resolution() ? request.resolution() : SceneResolution(scene);
   } catch (const Error& e) {
-    RethrowWithFlag(e, FlagNames());
+    f.fields.Rethrow(e);
   }
   if (!scene.has_start() || !scene.has_goal()) {
     throw InputError(f.scene, "the scene has no start and goal to plan between");
@@ -61,7 +49,6 @@ v1::PlanPathsRequest BuildRequest(const PlanFlags& f, const v1::Scene& scene, do
   request.set_time_per_path_s(f.time_s);
   request.set_seed(f.seed);
   request.set_simplify(f.simplify);
-  if (f.resolution_opt->count() > 0) request.set_resolution(f.resolution);
   return request;
 }
 
@@ -110,7 +97,14 @@ int RunLocal(const PlanFlags& f) {
   v1::Scene scene_proto = ReadSceneFile(f.scene);
   double resolution = 0;
   const v1::PlanPathsRequest proto = BuildRequest(f, scene_proto, &resolution);
-  const LoadedScene loaded = LoadScene(std::move(scene_proto), f.scene, resolution);
+  // The local planner checks the resolution the flag gave.
+  const LoadedScene loaded = [&] {
+    try {
+      return LoadScene(std::move(scene_proto), f.scene, resolution);
+    } catch (const Error& e) {
+      f.fields.Rethrow(e);
+    }
+  }();
   const Space& space = loaded.scene->space;
   PlanRequest request{.planner = ParsePlannerType(proto.planner(), "planner"),
                       .start = *loaded.scene->start,
@@ -125,7 +119,7 @@ int RunLocal(const PlanFlags& f) {
   try {
     result = PlanPaths(*loaded.planner, request);
   } catch (const Error& e) {
-    RethrowWithFlag(e, FlagNames());
+    f.fields.Rethrow(e);
   }
   // OMPL's own word on the runs that found nothing (the table says only "not found").
   for (const PlanAttempt& a : result.attempts) {
@@ -205,14 +199,22 @@ Subcommand AddPlanCommand(CLI::App& parent) {
   app->add_option("--seed", f.seed, "Seed; path i uses a seed derived from (seed, i)")
       ->capture_default_str();
   app->add_flag("--simplify", f.simplify, "Shortcut each path with OMPL's PathSimplifier");
-  f.resolution_opt = app->add_option(
-      "--resolution", f.resolution,
-      "Collision-check resolution, fraction of the space's extent (default: the scene's)");
-  app->add_flag("-q,--quiet", f.quiet, "With --server: no progress on stderr");
+  f.fields.Add<double>(
+      app, "--resolution",
+      "Collision-check resolution, fraction of the space's extent (default: the scene's)",
+      "resolution", [](v1::PlanPathsRequest& r, const double& v) { r.set_resolution(v); });
+  // The engine's fields that the other flags fill (core/plan names them as PlanRequest does).
+  f.fields.Name("planner", "--planner");
+  f.fields.Name("count", "--count");
+  f.fields.Name("time_s", "--time");
+  f.fields.Name("start", "--scene");
+  f.fields.Name("goal", "--scene");
+  f.fields.Name("scene.resolution", "--scene");
   return Subcommand{
       .app = app,
       .run = [flags] { return RunLocal(*flags); },
-      .run_remote = [flags](const RemoteOptions& remote) { return RunRemote(*flags, remote); }};
+      .run_remote = [flags](const RemoteOptions& remote) { return RunRemote(*flags, remote); },
+      .quiet = &f.quiet};
 }
 
 }  // namespace hgraph::cli

@@ -66,7 +66,14 @@ v1::Digest DigestOf(const std::string& bytes) {
 
 }  // namespace
 
-void AddConnectionFlags(CLI::App* app, RemoteOptions* remote) {
+void AddServerFlags(CLI::App* app, RemoteOptions* remote, ServerFlag server) {
+  // Without --server a subcommand that may take it runs in process.
+  CLI::Option* address =
+      app->add_option("--server", remote->server, "Run through hgraph-server at HOST:PORT");
+  if (server == ServerFlag::kRequired) address->required();
+  app->add_option("--timeout", remote->timeout_s,
+                  "With --server: deadline per call, seconds (0 = none)")
+      ->capture_default_str();
   app->add_option("--tls-ca", remote->tls_ca,
                   "With --server: TLS, verifying the server's certificate against this PEM CA");
   app->add_option("--tls-cert", remote->tls_cert,
@@ -318,12 +325,9 @@ Subcommand WithServer(Subcommand local) {
   HGRAPH_CHECK(local.run_remote);
   auto remote = std::make_shared<RemoteOptions>();
   CLI::App* app = local.app;
-  app->add_option("--server", remote->server,
-                  "Run through hgraph-server at HOST:PORT instead of in process");
+  AddServerFlags(app, remote.get(), ServerFlag::kOptional);
   app->add_option("--session", remote->session,
                   "With --server: reuse this session (sessions/<id>) instead of creating one");
-  app->add_option("--timeout", remote->timeout_s, "With --server: deadline per call, seconds");
-  AddConnectionFlags(app, remote.get());
   auto run_local = std::move(local.run);
   auto run_remote = local.run_remote;
   local.run = [remote, run_local, run_remote] {

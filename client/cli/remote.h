@@ -17,9 +17,12 @@
 
 namespace hgraph::cli {
 
-// Registers --tls-ca, --tls-cert, --tls-key and --token (also read from $HGRAPH_TOKEN; the flag
-// wins) on a subcommand that talks to a server.
-void AddConnectionFlags(CLI::App* app, RemoteOptions* remote);
+// Whether a subcommand needs --server (requery, add-paths, health) or runs in process without it.
+enum class ServerFlag { kOptional, kRequired };
+// Registers the flags of every subcommand that talks to a server, each with one help text:
+// --server, --timeout (a default already in *remote is shown), --tls-ca, --tls-cert, --tls-key
+// and --token (also read from $HGRAPH_TOKEN; the flag wins).
+void AddServerFlags(CLI::App* app, RemoteOptions* remote, ServerFlag server);
 
 // A channel to remote.server: TLS when --tls-ca or --tls-cert is given (the server's certificate
 // is verified against --tls-ca, or the system's roots without it), plaintext otherwise. Throws
@@ -79,7 +82,7 @@ class ServerFailure : public Error {
   using Error::Error;
 };
 
-// Adds --server, --session, --timeout and the connection flags to `local`'s app; with --server set,
+// Adds the server flags (AddServerFlags) and --session to `local`'s app; with --server set,
 // its run is local.run_remote (which it requires), else the in-process run.
 Subcommand WithServer(Subcommand local);
 

@@ -24,7 +24,7 @@ struct StoredHGraphFlags {
   bool report_clearance = false;
 
   void Add(CLI::App* app) {
-    app->add_option("--server", remote.server, "hgraph-server at HOST:PORT")->required();
+    AddServerFlags(app, &remote, ServerFlag::kRequired);
     app->add_option("--hgraph", hgraph, "H-Graph name from a merge (sessions/<id>/hgraphs/<n>)")
         ->required();
     measure.Add(app);
@@ -33,8 +33,6 @@ struct StoredHGraphFlags {
         "Profile the path's clearance for the report under length, for this query (without "
         "it: as the merge that built the H-Graph asked)");
     app->add_option("--out", out, "Write the MergeResult JSON here");
-    app->add_option("--timeout", remote.timeout_s, "Deadline, seconds");
-    AddConnectionFlags(app, &remote);
   }
   // The H-Graph's session names the replica that holds it.
   RemoteOptions Remote() const {
@@ -46,7 +44,7 @@ struct StoredHGraphFlags {
     try {
       return measure.ToProto();
     } catch (const Error& e) {
-      RethrowWithFlag(e, {{"measure.k", "--k"}, {"measure.safety", "--safety"}});
+      measure.fields.Rethrow(e);
     }
   }
   int Finish(const v1::MergeResult& result, const std::string& name) const {

@@ -15,6 +15,7 @@
 #include "core/common/parallel.h"
 #include "core/merge/optimize.h"
 #include "core/merge/path_check.h"
+#include "core/merge/search_view.h"
 #include "core/merge/shortcut.h"
 #include "core/merge/stored_input.h"
 #include "core/search/search.h"
@@ -30,23 +31,6 @@ using Clock = std::chrono::steady_clock;
 // 1, 2, 4 and 8 check 9654, 9661, 9665 and 9682 edges.
 constexpr int kLazyBatch = 8;
 
-// The automatic post-optimization's budget, and the gain below which a round ends it.
-
-// The H-Graph's shape in `stats`: its sizes and the candidate parameters, which every query
-// reports as they are, without the figures that count the work of one call (checks, queries,
-// rounds, reuse).
-MergeStats ShapeOf(const MergeStats& stats) {
-  return MergeStats{.nodes = stats.nodes,
-                    .input_edges = stats.input_edges,
-                    .input_edges_invalid = stats.input_edges_invalid,
-                    .candidate_edges = stats.candidate_edges,
-                    .threads = stats.threads,
-                    .alignments = stats.alignments,
-                    .radius = stats.radius,
-                    .gap_init = stats.gap_init,
-                    .gap_extend = stats.gap_extend};
-}
-
 // What a check report says of its motion, in one byte: 0 unchecked, else its state, whether
 // it carries a profile and whether it is certified (a later check adds one or the other).
 uint8_t KnownOf(const EdgeReport& report) {
@@ -54,68 +38,6 @@ uint8_t KnownOf(const EdgeReport& report) {
   return static_cast<uint8_t>((report.state == EdgeState::kValid ? 1 : 2) |
                               (report.has_clearance ? 4 : 0) | (report.certified ? 8 : 0));
 }
-
-// How a search sees the H-Graph's edges: invalid ones not at all, checked ones (with a profile
-// where the measure needs one) by their value, the others by the measure's bound. What it saw of
-// an edge is kept until a check changes what is known of it (Forget): a search looks at an edge
-// once per node it settles next to it, and a bound scans the edge's probes.
-class SearchView {
- public:
-  SearchView(const HGraph& graph, const EdgeEvidence& evidence, const Measure& measure,
-             LazyEdgeEvaluator evaluator)
-      : graph_(graph),
-        evidence_(evidence),
-        measure_(measure),
-        evaluator_(evaluator),
-        seen_(graph.num_edges()),
-        seen_now_(graph.num_edges(), 0) {}
-
-  ExactFn exact() const {
-    return [this](int e) { return Exact(e); };
-  }
-  SearchEdgeFn see() {
-    return [this](int e) {
-      if (!seen_now_[e]) {
-        seen_[e] = Look(e);
-        seen_now_[e] = 1;
-      }
-      return seen_[e];
-    };
-  }
-  void Forget(const std::vector<int>& edges) {
-    for (int e : edges) seen_now_[e] = 0;
-  }
-
- private:
-  bool Exact(int e) const {
-    const EdgeReport& report = graph_.edge(e).report;
-    return !report.usable() || (report.state == EdgeState::kValid &&
-                                (!measure_.needs_clearance() || report.has_clearance));
-  }
-  SearchEdge Look(int e) {
-    const EdgeReport& report = graph_.edge(e).report;
-    const double length = evidence_.edge_length[e];
-    if (!report.usable()) {
-      return SearchEdge{.value = std::numeric_limits<double>::quiet_NaN(), .length = length};
-    }
-    if (Exact(e)) {
-      const double value = measure_.EdgeValue(report);
-      return SearchEdge{.value = value, .length = length, .floor = value, .checked = true};
-    }
-    const EdgeBoundInput input = evaluator_.BoundInput(e, measure_.uses_ceilings());
-    return SearchEdge{.value = measure_.EdgeBound(input),
-                      .length = length,
-                      .floor = measure_.EdgeFloor(input),
-                      .checked = report.state == EdgeState::kValid};
-  }
-
-  const HGraph& graph_;
-  const EdgeEvidence& evidence_;
-  const Measure& measure_;
-  LazyEdgeEvaluator evaluator_;
-  std::vector<SearchEdge> seen_;
-  std::vector<char> seen_now_;
-};
 
 // The error of a search that found no path under `measure`.
 [[noreturn]] void ThrowNoPath(const Measure& measure) {
@@ -174,22 +96,16 @@ HybridizationSession::HybridizationSession(const ClearanceChecker& checker,
   const Clock::time_point started = Clock::now();
   const Space& space = checker.space();
   const bool eager = options_.evaluation == Evaluation::kEager;
-  build_stats_.threads = ResolveThreads(options_.threads);
-  build_stats_.nodes = graph_.num_nodes();
-  evidence_.Grow(graph_, space);
+  GrowEvidence();  // the inputs' nodes and edges
   build_timing_.validate_ms = MsSince(started);
 
   // Input edges carry their clearance profile when every input is reported.
   Clock::time_point phase = Clock::now();
   std::vector<int> input_edges(graph_.num_edges());
-  for (int e = 0; e < graph_.num_edges(); ++e) input_edges[e] = e;
-  build_stats_.input_edges = graph_.num_edges();
+  std::iota(input_edges.begin(), input_edges.end(), 0);
   if (eager || options_.report_inputs) {
     Evaluator().CheckEdges(input_edges, EdgeProof::kProfile, "inputs", request.progress,
-                           request.cancel, &build_stats_.edges_checked);
-    for (int e : input_edges) {
-      if (graph_.edge(e).report.state == EdgeState::kInvalid) ++build_stats_.input_edges_invalid;
-    }
+                           request.cancel, &unreported_.edges_checked);
   }
   build_timing_.inputs_ms = MsSince(phase);
 
@@ -199,30 +115,23 @@ HybridizationSession::HybridizationSession(const ClearanceChecker& checker,
   const bool aligned = options_.candidates.variant == Variant::kEditDistance ||
                        options_.candidates.variant == Variant::kEditDistanceNeighborhood;
   (aligned ? build_timing_.align_ms : build_timing_.candidates_ms) = MsSince(phase);
-  build_stats_.candidate_edges = static_cast<int64_t>(candidates.pairs.size());
-  build_stats_.alignments = candidates.alignments;
-  build_stats_.radius = candidates.radius;
-  build_stats_.gap_init = candidates.gap_init;
-  build_stats_.gap_extend = candidates.gap_extend;
+  alignments_ = candidates.alignments;
   candidates_ = Resolved(options_.candidates, candidates);
   std::vector<int> bridge_edges;
   bridge_edges.reserve(candidates.pairs.size());
-  for (const auto& [u, v] : candidates.pairs) bridge_edges.push_back(graph_.AddEdge(u, v, false));
-  evidence_.Grow(graph_, space);
+  for (const auto& [u, v] : candidates.pairs) bridge_edges.push_back(AddEdgeWithEvidence(u, v));
 
   if (eager) {
     phase = Clock::now();
     Evaluator().CheckEdges(
         bridge_edges, NeedsClearance(request.measure) ? EdgeProof::kProfile : EdgeProof::kSamples,
-        "check", request.progress, request.cancel, &build_stats_.edges_checked);
+        "check", request.progress, request.cancel, &unreported_.edges_checked);
     build_timing_.check_ms = MsSince(phase);
   }
+  // The build's checks as its edges' reports count them, for the first query to report.
   for (int e = 0; e < graph_.num_edges(); ++e) {
-    if (graph_.edge(e).report.state == EdgeState::kValid) ++build_stats_.edges_valid;
-  }
-  for (int e = 0; e < graph_.num_edges(); ++e) {
-    build_stats_.collision_checks += graph_.edge(e).report.collision_checks;
-    build_stats_.distance_queries += graph_.edge(e).report.distance_queries;
+    unreported_.collision_checks += graph_.edge(e).report.collision_checks;
+    unreported_.distance_queries += graph_.edge(e).report.distance_queries;
   }
   build_timing_.total_ms = MsSince(started);
 }
@@ -239,8 +148,7 @@ int64_t HybridizationSession::AddPaths(const std::vector<InputPath>& paths,
   const int first_edge = graph_.num_edges();
   std::vector<int> input_edges;
   for (size_t i = 0; i < paths.size(); ++i) {
-    const int p = graph_.AddPath(space, paths[i], options_.endpoint_tolerance,
-                                 options_.max_node_spacing, "paths[" + std::to_string(i) + "]");
+    const int p = AddPathWithEvidence(paths[i], "paths[" + std::to_string(i) + "]");
     for (int e : graph_.path_edges(p)) {
       if (e >= first_edge) input_edges.push_back(e);
     }
@@ -249,14 +157,10 @@ int64_t HybridizationSession::AddPaths(const std::vector<InputPath>& paths,
   const CandidateSet candidates = BridgeCandidates(graph_, space, candidates_, since);
   std::vector<int> bridges;
   bridges.reserve(candidates.pairs.size());
-  for (const auto& [u, v] : candidates.pairs) bridges.push_back(graph_.AddEdge(u, v, false));
-  build_stats_.alignments += candidates.alignments;
+  for (const auto& [u, v] : candidates.pairs) bridges.push_back(AddEdgeWithEvidence(u, v));
+  alignments_ += candidates.alignments;
   std::sort(bridges.begin(), bridges.end());
   bridges.erase(std::unique(bridges.begin(), bridges.end()), bridges.end());
-  SyncEdgeData();
-  build_stats_.nodes = graph_.num_nodes();
-  build_stats_.input_edges += static_cast<int64_t>(input_edges.size());
-  build_stats_.candidate_edges += static_cast<int64_t>(bridges.size());
   if (options_.evaluation == Evaluation::kEager) {
     // The next query reports this work with its own (AddPaths answers with that query).
     const int64_t checks_before = checker_->total_collision_checks();
@@ -271,17 +175,65 @@ int64_t HybridizationSession::AddPaths(const std::vector<InputPath>& paths,
   return static_cast<int64_t>(bridges.size());
 }
 
-void HybridizationSession::SyncEdgeData() { evidence_.Grow(graph_, checker_->space()); }
+int HybridizationSession::AddEdgeWithEvidence(int u, int v, bool input, const EdgeReport* report) {
+  const int e = graph_.AddEdge(u, v, input);
+  if (report != nullptr && graph_.edge(e).report.state == EdgeState::kUnchecked) {
+    graph_.mutable_edge(e).report = *report;
+  }
+  GrowEvidence();
+  return e;
+}
+
+int HybridizationSession::AddNodeWithEvidence(const Config& q, const WaypointSource& source) {
+  const int n = graph_.AddNode(q, source.path, source.index, source.t);
+  GrowEvidence();
+  return n;
+}
+
+int HybridizationSession::AddPathWithEvidence(const InputPath& path, const std::string& field) {
+  const int p = graph_.AddPath(checker_->space(), path, options_.endpoint_tolerance,
+                               options_.max_node_spacing, field);
+  GrowEvidence();
+  return p;
+}
+
+void HybridizationSession::GrowEvidence() { evidence_.Grow(graph_, checker_->space()); }
 
 LazyEdgeEvaluator HybridizationSession::Evaluator() {
+  HGRAPH_CHECK(evidence_.num_nodes() == graph_.num_nodes() &&
+               evidence_.num_edges() == graph_.num_edges());
   return LazyEdgeEvaluator(*checker_, graph_, evidence_, ResolveThreads(options_.threads));
+}
+
+void HybridizationSession::FillShape(int nodes, int edges, MergeStats* stats) const {
+  stats->nodes = nodes;
+  stats->threads = ResolveThreads(options_.threads);
+  stats->alignments = alignments_;
+  stats->radius = candidates_.radius;
+  stats->gap_init = candidates_.gap_init;
+  stats->gap_extend = candidates_.gap_extend;
+  stats->input_edges = 0;
+  stats->candidate_edges = 0;
+  stats->edges_valid = 0;
+  stats->input_edges_invalid = 0;
+  for (int e = 0; e < edges; ++e) {
+    const HEdge& edge = graph_.edge(e);
+    ++(edge.input ? stats->input_edges : stats->candidate_edges);
+    if (edge.report.state == EdgeState::kValid) ++stats->edges_valid;
+    if (edge.input && edge.report.state == EdgeState::kInvalid) ++stats->input_edges_invalid;
+  }
+}
+
+MergeStats HybridizationSession::build_stats() const {
+  MergeStats stats = unreported_;
+  FillShape(graph_.num_nodes(), graph_.num_edges(), &stats);
+  return stats;
 }
 
 SearchResult HybridizationSession::SearchBest(const Measure& measure, EdgeProof finish,
                                               const ProgressCallback& progress,
                                               const CancelToken& cancel, MergeResult* result,
                                               int64_t* rechecked) {
-  SyncEdgeData();
   PrepareBounds(measure, cancel, result);
   SearchView view(graph_, evidence_, measure, Evaluator());
   std::vector<double> cost_to_go;
@@ -439,10 +391,9 @@ MergeResult HybridizationSession::Query(const MeasureSpec& spec, const ProgressC
   MergeResult result;
   result.measure = spec;
   result.variant = options_.candidates.variant;
-  // The first query reports the build with its own work; a later one reports the same shape
-  // and only its own work.
+  // The first query reports the build's timing; every query its own work, with what no query
+  // has reported yet (the build's, an eager AddPaths'), and the H-Graph's shape (CountWork).
   const bool first = std::exchange(first_query_, false);
-  result.stats = first ? build_stats_ : ShapeOf(build_stats_);
   result.timing = first ? build_timing_ : MergeTiming{};
   const int64_t checks_before = checker_->total_collision_checks();
   const int64_t queries_before = checker_->total_distance_queries();
@@ -503,7 +454,7 @@ MergeResult HybridizationSession::Query(const MeasureSpec& spec, const ProgressC
 
   ReportInputs(*measure, &result);
   result.timing.evaluate_ms += MsSince(phase);
-  CountWork(first, known_before, checks_before, queries_before, rechecked, &result);
+  CountWork(first, base_nodes, known_before, checks_before, queries_before, rechecked, &result);
   result.timing.total_ms += MsSince(started);
   return result;
 }
@@ -524,7 +475,8 @@ void HybridizationSession::ReportInputs(const Measure& measure, MergeResult* res
   if (result->best_input >= 0) result->best_input_objective = measure.Objective(best_quality);
 }
 
-void HybridizationSession::CountWork(bool first, const std::vector<uint8_t>& known_before,
+void HybridizationSession::CountWork(bool first, int base_nodes,
+                                     const std::vector<uint8_t>& known_before,
                                      int64_t checks_before, int64_t queries_before,
                                      int64_t rechecked, MergeResult* result) {
   MergeStats& stats = result->stats;
@@ -534,20 +486,13 @@ void HybridizationSession::CountWork(bool first, const std::vector<uint8_t>& kno
       checker_->total_distance_queries() - queries_before + unreported_.distance_queries;
   stats.edges_checked += rechecked + unreported_.edges_checked;
   unreported_ = MergeStats{};
-  // Of the stored H-Graph's own edges: the valid ones, and those whose stored check served this
-  // query as it was (checked before it, and nothing more learnt of them since).
-  // Derived from the graph, not kept beside it: the input edges found invalid so far, after
-  // AddPaths and lazy checks too.
-  stats.edges_valid = 0;
+  FillShape(base_nodes, static_cast<int>(known_before.size()), &stats);
+  // Of the stored H-Graph's own edges, those whose stored check served this query as it was
+  // (checked before it, and nothing more learnt of them since).
   stats.edges_reused = 0;
-  stats.input_edges_invalid = 0;
   for (size_t e = 0; e < known_before.size(); ++e) {
-    const HEdge& edge = graph_.edge(static_cast<int>(e));
-    if (edge.report.state == EdgeState::kValid) ++stats.edges_valid;
-    if (edge.input && edge.report.state == EdgeState::kInvalid) ++stats.input_edges_invalid;
-    if (!first && known_before[e] != 0 && known_before[e] == KnownOf(edge.report)) {
-      ++stats.edges_reused;
-    }
+    const uint8_t known = KnownOf(graph_.edge(static_cast<int>(e)).report);
+    if (!first && known_before[e] != 0 && known_before[e] == known) ++stats.edges_reused;
   }
 }
 

@@ -169,7 +169,9 @@ class HybridizationSession {
                    const CancelToken& cancel = {});
 
   const HGraph& graph() const { return graph_; }
-  const MergeStats& build_stats() const { return build_stats_; }
+  // The H-Graph's shape (FillShape), with the work no query has reported yet: before the first
+  // query, the build's.
+  MergeStats build_stats() const;
   const MergeTiming& build_timing() const { return build_timing_; }
   // Approximate memory held, in bytes (for cache budgets).
   size_t memory_bytes() const;
@@ -178,10 +180,23 @@ class HybridizationSession {
   // The anytime post-optimization (optimize.h) grows the query's overlay and searches it.
   friend class PostOptimizer;
   HybridizationSession(const HybridizationSession&) = default;
+  // Every growth of the H-Graph goes through these three, and each grows the evidence with it
+  // (GrowEvidence), so that the two always match.
+  // The edge (u, v), or the one the H-Graph holds between them (HGraph::AddEdge); `report`, if
+  // given, becomes its report while it is unchecked. Returns its id.
+  int AddEdgeWithEvidence(int u, int v, bool input = false, const EdgeReport* report = nullptr);
+  // A node at q that lies where `source` says on the inputs; returns its id.
+  int AddNodeWithEvidence(const Config& q, const WaypointSource& source);
+  // An input path, its nodes and edges (HGraph::AddPath); returns its index.
+  int AddPathWithEvidence(const InputPath& path, const std::string& field);
+  // Extends the evidence to the H-Graph's nodes and edges (the only caller of EdgeEvidence::Grow).
+  void GrowEvidence();
   // The evaluator of this H-Graph's edges (a view of graph_ and evidence_).
   LazyEdgeEvaluator Evaluator();
-  // Extends the per-node and per-edge data to nodes and edges added since.
-  void SyncEdgeData();
+  // The shape of the H-Graph's first `nodes` nodes and `edges` edges (the stored H-Graph without
+  // a query's overlay) in *stats, derived from them: their counts, the valid edges and the
+  // invalid input edges, the resolved candidate parameters and the alignments run.
+  void FillShape(int nodes, int edges, MergeStats* stats) const;
   // The best path under `measure` with every edge checked, and then certified (`finish`
   // kCertificate) or also profiled (kClearance, so that every measure can be reported). The
   // certificate can find a collision a sampled check missed, or fail where a motion grazes an
@@ -203,11 +218,12 @@ class HybridizationSession {
   // Every input's report under `measure`, from the reports stored on its edges, and the best
   // checked valid input.
   void ReportInputs(const Measure& measure, MergeResult* result) const;
-  // The query's work (checks since the counts `*_before`, with what an eager AddPaths left
-  // unreported) and the stats derived from the stored H-Graph's edges (known_before[e]: what
-  // was known of edge e before the query, KnownOf).
-  void CountWork(bool first, const std::vector<uint8_t>& known_before, int64_t checks_before,
-                 int64_t queries_before, int64_t rechecked, MergeResult* result);
+  // The query's work (checks since the counts `*_before`, with the work no query has reported:
+  // the build's, an eager AddPaths') and the edges whose stored report served it (known_before[e]:
+  // what was known of edge e before the query, KnownOf).
+  void CountWork(bool first, int base_nodes, const std::vector<uint8_t>& known_before,
+                 int64_t checks_before, int64_t queries_before, int64_t rechecked,
+                 MergeResult* result);
   // The nodes of a path found, as the output lists them: a node at the same configuration as
   // the one before it (an input that repeats a waypoint) once.
   std::vector<int> OutputNodes(const SearchResult& found) const;
@@ -219,11 +235,12 @@ class HybridizationSession {
   // The candidate options with the build's resolved parameters (radius, gaps): AddPaths and the
   // post-optimization's new points use them, so that they do not drift with new inputs.
   CandidateOptions candidates_;
+  int alignments_ = 0;  // pairs of paths aligned for candidates, by the build and AddPaths
   HGraph graph_;
-  MergeStats build_stats_;
   MergeTiming build_timing_;
   bool first_query_ = true;
-  // Work done since the last query that no result has reported yet (an eager AddPaths' checks).
+  // Work that no result has reported yet (the build's checks, an eager AddPaths'): the next
+  // query reports it with its own. Its edges_checked, collision_checks, distance_queries only.
   MergeStats unreported_;
   // The edges of the last query's result under a measure that needs no clearance (a length
   // merge's path, certified but not profiled unless report_clearance).

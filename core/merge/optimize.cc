@@ -125,9 +125,7 @@ SearchResult PostOptimizer::Search() {
 }
 
 void PostOptimizer::Keep(int a, int b, const EdgeReport& report) {
-  if (a == b) return;
-  const int e = graph_.AddEdge(a, b, false);
-  if (graph_.edge(e).report.state == EdgeState::kUnchecked) graph_.mutable_edge(e).report = report;
+  if (a != b) session_.AddEdgeWithEvidence(a, b, false, &report);
 }
 
 ShortcutResult PostOptimizer::Shorten(const std::vector<int>& ids,
@@ -160,9 +158,7 @@ ShortcutResult PostOptimizer::Shorten(const std::vector<int>& ids,
   std::vector<int> fresh;
   for (size_t j = 0; j < shortcut.ids.size(); ++j) {
     if (shortcut.ids[j] >= 0) continue;
-    const WaypointSource& source = shortcut.sources[j];
-    shortcut.ids[j] =
-        graph_.AddNode(shortcut.path.waypoints[j], source.path, source.index, source.t);
+    shortcut.ids[j] = session_.AddNodeWithEvidence(shortcut.path.waypoints[j], shortcut.sources[j]);
     fresh.push_back(shortcut.ids[j]);
   }
   for (size_t j = 0; j + 1 < shortcut.ids.size(); ++j) {
@@ -173,7 +169,7 @@ ShortcutResult PostOptimizer::Shorten(const std::vector<int>& ids,
     for (int u : fresh) {
       for (int v = 0; v < graph_.num_nodes(); ++v) {
         if (v == u || space.Distance(graph_.node(u).q, graph_.node(v).q) > reach_) continue;
-        graph_.AddEdge(u, v, false);
+        session_.AddEdgeWithEvidence(u, v);
       }
     }
   }

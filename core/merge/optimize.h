@@ -63,7 +63,9 @@ class PostOptimizer {
   void Restart();
 
   HybridizationSession& session_;
-  HGraph& graph_;
+  // The session's H-Graph, grown through the session only (AddEdgeWithEvidence and
+  // AddNodeWithEvidence), so that its evidence grows with it.
+  const HGraph& graph_;
   const Measure& measure_;
   const ProgressCallback& progress_;
   const CancelToken& cancel_;

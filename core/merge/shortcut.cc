@@ -83,274 +83,23 @@ struct Candidate {
   bool free = false;
 };
 
-// What the three phases of ShortcutCertified share: the request, and the path being shortened
-// (ShortcutResult's path, ids, sources and edges, kept in step).
-struct Shortening {
-  const MotionChecker& checker;
-  const ShortcutRequest& request;
-  const CancelToken& cancel;
-  const Space& space;
-  int threads;
-  bool lazy;
-  ShortcutResult& out;
-};
+// One call of ShortcutCertified: the request, and the path being shortened (the result's path,
+// ids, sources and edges, kept in step), through its three phases.
+class Shortening {
+ public:
+  Shortening(const MotionChecker& checker, const ShortcutRequest& request,
+             const CancelToken& cancel);
+  // Phase 1: waypoints dropped where their neighbours connect.
+  void DropWaypoints();
+  // Phase 2: seeded random pairs of points along the path, some of them partial shortcuts.
+  void TryRandomPairs();
+  // Phase 3 (corners_only): every corner cut where a cut is proven free.
+  void CutCorners();
+  ShortcutResult Finish() { return std::move(out_); }
 
-// Phase 1: waypoints dropped where their neighbours connect.
-void DropWaypoints(const Shortening& shortening) {
-  const MotionChecker& checker = shortening.checker;
-  const ShortcutRequest& request = shortening.request;
-  const CancelToken& cancel = shortening.cancel;
-  const Space& space = shortening.space;
-  const int threads = shortening.threads;
-  const bool lazy = shortening.lazy;
-  ShortcutResult& out = shortening.out;
-  std::vector<Config>& q = shortening.out.path.waypoints;
-  std::vector<int>& ids = shortening.out.ids;
-  std::vector<WaypointSource>& sources = shortening.out.sources;
-  std::vector<EdgeReport>& edges = shortening.out.edges;
-  // Waypoints whose neighbours connect directly. A pass checks every waypoint not yet settled
-  // and drops those whose check passed, left to right, never two neighbours (the second one's
-  // check joined a waypoint the first one removed); a drop unsettles the neighbours.
-  std::vector<char> settled(q.size(), request.corners_only ? 1 : 0);
-  for (;;) {
-    cancel.ThrowIfStopped();
-    std::vector<size_t> tried;
-    for (size_t j = 1; j + 1 < q.size(); ++j) {
-      if (settled[j]) continue;
-      if (space.Distance(q[j - 1], q[j + 1]) >= edges[j - 1].length + edges[j].length) {
-        settled[j] = 1;
-        continue;
-      }
-      tried.push_back(j);
-    }
-    if (tried.empty()) break;
-    std::vector<EdgeReport> joined(tried.size());
-    std::vector<char> from_caller(tried.size(), 0);
-    for (size_t k = 0; k < tried.size(); ++k) {
-      const size_t j = tried[k];
-      if (!request.known || ids[j - 1] < 0 || ids[j + 1] < 0) continue;
-      const EdgeReport* known = request.known(ids[j - 1], ids[j + 1]);
-      // Taken when it settles the question: free, or not free whatever the safety.
-      if (known == nullptr || (!MayTake(*known, request.safety, lazy) &&
-                               known->state != EdgeState::kInvalid && known->usable())) {
-        continue;
-      }
-      joined[k] = *known;
-      from_caller[k] = 1;
-    }
-    ParallelFor(threads, tried.size(), [&](size_t k) {
-      if (from_caller[k] || cancel.stopped()) return;
-      const size_t j = tried[k];
-      joined[k] = Check(checker, q[j - 1], q[j + 1], request.safety, lazy);
-    });
-    cancel.ThrowIfStopped();
-    std::vector<size_t> drops;
-    std::vector<EdgeReport> drop_reports;
-    for (size_t k = 0; k < tried.size(); ++k) {
-      const size_t j = tried[k];
-      if (!from_caller[k]) {
-        ++out.edges_checked;
-        if (ids[j - 1] >= 0 && ids[j + 1] >= 0) {
-          out.id_checks.emplace_back(ids[j - 1], ids[j + 1], joined[k]);
-        }
-      }
-      settled[j] = 1;
-      if (!MayTake(joined[k], request.safety, lazy)) continue;
-      if (!drops.empty() && drops.back() + 1 == j) {
-        settled[j] = 0;  // its left neighbour goes: try again with the new one
-        continue;
-      }
-      drops.push_back(j);
-      drop_reports.push_back(std::move(joined[k]));
-    }
-    for (size_t d = drops.size(); d-- > 0;) {
-      const size_t j = drops[d];
-      q.erase(q.begin() + static_cast<std::ptrdiff_t>(j));
-      ids.erase(ids.begin() + static_cast<std::ptrdiff_t>(j));
-      sources.erase(sources.begin() + static_cast<std::ptrdiff_t>(j));
-      edges.erase(edges.begin() + static_cast<std::ptrdiff_t>(j));
-      edges[j - 1] = std::move(drop_reports[d]);
-      settled.erase(settled.begin() + static_cast<std::ptrdiff_t>(j));
-      settled[j - 1] = 0;
-      settled[j] = 0;
-      ++out.accepted;
-    }
-  }
-}
-
-// Phase 2: seeded random pairs of points along the path, some of them partial shortcuts.
-void TryRandomPairs(const Shortening& shortening) {
-  const MotionChecker& checker = shortening.checker;
-  const ShortcutRequest& request = shortening.request;
-  const CancelToken& cancel = shortening.cancel;
-  const Space& space = shortening.space;
-  const int threads = shortening.threads;
-  const bool lazy = shortening.lazy;
-  ShortcutResult& out = shortening.out;
-  std::vector<Config>& q = shortening.out.path.waypoints;
-  std::vector<int>& ids = shortening.out.ids;
-  std::vector<WaypointSource>& sources = shortening.out.sources;
-  std::vector<EdgeReport>& edges = shortening.out.edges;
-  // Random pairs of points along the path, a batch at a time.
-  std::mt19937_64 rng(request.seed);
-  const std::vector<Space::Part> parts = space.Parts();
-  std::uniform_real_distribution<double> share(0.0, 1.0);
-  const int attempts =
-      request.corners_only ? 0
-      : request.attempts > 0
-          ? request.attempts
-          : std::max(kMinAttempts, kAttemptsPerWaypoint * static_cast<int>(q.size()));
-  for (int attempt = 0; attempt < attempts && q.size() >= 2;) {
-    cancel.ThrowIfStopped();
-    const double total = PathLength(edges);
-    if (total <= 0) break;
-    std::uniform_real_distribution<double> position(0.0, total);
-    // Edge index and fraction of a position along the path.
-    const auto locate = [&](double s, size_t* edge, double* t) {
-      double at = 0;
-      for (size_t j = 0; j < edges.size(); ++j) {
-        if (s <= at + edges[j].length || j + 1 == edges.size()) {
-          *edge = j;
-          *t = edges[j].length > 0 ? std::clamp((s - at) / edges[j].length, 0.0, 1.0) : 0.0;
-          return;
-        }
-        at += edges[j].length;
-      }
-    };
-    std::vector<Candidate> batch;
-    for (int drawn = 0; drawn < kShortcutBatch && attempt < attempts; ++drawn, ++attempt) {
-      const bool partial = request.partial > 0 && parts.size() >= 2 && share(rng) < request.partial;
-      double s0 = position(rng);
-      double s1 = position(rng);
-      if (s0 > s1) std::swap(s0, s1);
-      Candidate c;
-      locate(s0, &c.e0, &c.t0);
-      locate(s1, &c.e1, &c.t1);
-      const double t0 = c.t0;
-      const double t1 = c.t1;
-      if (c.e0 == c.e1) continue;  // one straight edge: nothing to gain
-      c.a = space.Interpolate(q[c.e0], q[c.e0 + 1], t0);
-      c.b = space.Interpolate(q[c.e1], q[c.e1 + 1], t1);
-      // What the stretch from a to b costs now, along the path.
-      double along = (1 - t0) * edges[c.e0].length + t1 * edges[c.e1].length;
-      for (size_t j = c.e0 + 1; j < c.e1; ++j) along += edges[j].length;
-      double cost = 0;
-      if (partial && along > 0) {
-        // The part moves straight from a to b, as far along at each waypoint as the path is.
-        const Space::Part part =
-            parts[std::uniform_int_distribution<size_t>(0, parts.size() - 1)(rng)];
-        double at = (1 - t0) * edges[c.e0].length;
-        const Config* previous = &c.a;
-        c.points.reserve(c.e1 - c.e0);
-        for (size_t j = c.e0 + 1; j <= c.e1; ++j) {
-          Config m = q[j];
-          m.segment(part.offset, part.size) =
-              space.Interpolate(c.a, c.b, at / along).segment(part.offset, part.size);
-          cost += space.Distance(*previous, m);
-          c.points.push_back(std::move(m));
-          previous = &c.points.back();
-          at += edges[j].length;
-        }
-        cost += space.Distance(*previous, c.b);
-      } else {
-        cost = space.Distance(c.a, c.b);
-      }
-      if (cost >= along * (1 - 1e-9)) continue;
-      c.gain = along - cost;
-      batch.push_back(std::move(c));
-    }
-    if (batch.empty()) continue;
-    ParallelFor(threads, batch.size(), [&](size_t k) {
-      Candidate& c = batch[k];
-      for (size_t j = 0; j <= c.points.size(); ++j) {
-        if (cancel.stopped()) return;
-        const Config& from = j == 0 ? c.a : c.points[j - 1];
-        const Config& to = j < c.points.size() ? c.points[j] : c.b;
-        c.reports.push_back(Check(checker, from, to, request.safety, lazy));
-        if (!MayTake(c.reports.back(), request.safety, lazy)) return;
-      }
-      c.free = true;
-    });
-    cancel.ThrowIfStopped();
-    for (const Candidate& c : batch) out.edges_checked += static_cast<int64_t>(c.reports.size());
-    // The free ones that gain most, no two sharing an edge of the path; applied from the end of
-    // the path so that the edge indices of the others stay valid.
-    std::vector<size_t> order(batch.size());
-    std::iota(order.begin(), order.end(), 0);
-    std::stable_sort(order.begin(), order.end(),
-                     [&](size_t x, size_t y) { return batch[x].gain > batch[y].gain; });
-    std::vector<size_t> taken;
-    for (size_t k : order) {
-      if (!batch[k].free) continue;
-      const bool overlaps = std::any_of(taken.begin(), taken.end(), [&](size_t o) {
-        return !(batch[k].e1 < batch[o].e0 || batch[o].e1 < batch[k].e0);
-      });
-      if (!overlaps) taken.push_back(k);
-    }
-    std::sort(taken.begin(), taken.end(),
-              [&](size_t x, size_t y) { return batch[x].e0 > batch[y].e0; });
-    for (size_t k : taken) {
-      Candidate& c = batch[k];
-      // The cut edges' pieces up to a and from b.
-      EdgeReport head = Piece(space, edges[c.e0], q[c.e0], c.a);
-      EdgeReport tail = Piece(space, edges[c.e1], c.b, q[c.e1 + 1]);
-      std::vector<Config> nq(q.begin(), q.begin() + static_cast<std::ptrdiff_t>(c.e0 + 1));
-      std::vector<int> ni(ids.begin(), ids.begin() + static_cast<std::ptrdiff_t>(c.e0 + 1));
-      std::vector<WaypointSource> ns(sources.begin(),
-                                     sources.begin() + static_cast<std::ptrdiff_t>(c.e0 + 1));
-      std::vector<EdgeReport> ne(edges.begin(), edges.begin() + static_cast<std::ptrdiff_t>(c.e0));
-      // Zero-length pieces (a point at a waypoint) are left out.
-      if (head.length > 0) {
-        nq.push_back(c.a);
-        ni.push_back(-1);
-        ns.push_back(SourceBetween(sources[c.e0], sources[c.e0 + 1], c.t0));
-        ne.push_back(std::move(head));
-      }
-      for (size_t j = 0; j < c.points.size(); ++j) {
-        nq.push_back(std::move(c.points[j]));
-        ni.push_back(-1);
-        ns.emplace_back();
-        ne.push_back(std::move(c.reports[j]));
-      }
-      ne.push_back(std::move(c.reports.back()));
-      if (tail.length > 0) {
-        nq.push_back(c.b);
-        ni.push_back(-1);
-        ns.push_back(SourceBetween(sources[c.e1], sources[c.e1 + 1], c.t1));
-        ne.push_back(std::move(tail));
-      }
-      nq.insert(nq.end(), q.begin() + static_cast<std::ptrdiff_t>(c.e1 + 1), q.end());
-      ni.insert(ni.end(), ids.begin() + static_cast<std::ptrdiff_t>(c.e1 + 1), ids.end());
-      ns.insert(ns.end(), sources.begin() + static_cast<std::ptrdiff_t>(c.e1 + 1), sources.end());
-      ne.insert(ne.end(), edges.begin() + static_cast<std::ptrdiff_t>(c.e1 + 1), edges.end());
-      q = std::move(nq);
-      ids = std::move(ni);
-      sources = std::move(ns);
-      edges = std::move(ne);
-      ++out.accepted;
-    }
-  }
-}
-
-// Phase 3 (corners_only): every corner cut where a cut is proven free.
-void CutCorners(const Shortening& shortening) {
-  const MotionChecker& checker = shortening.checker;
-  const ShortcutRequest& request = shortening.request;
-  const CancelToken& cancel = shortening.cancel;
-  const Space& space = shortening.space;
-  const int threads = shortening.threads;
-  const bool lazy = shortening.lazy;
-  ShortcutResult& out = shortening.out;
-  std::vector<Config>& q = shortening.out.path.waypoints;
-  std::vector<int>& ids = shortening.out.ids;
-  std::vector<WaypointSource>& sources = shortening.out.sources;
-  std::vector<EdgeReport>& edges = shortening.out.edges;
-  // Corners cut (corners_only): each interior waypoint is replaced by two points on its edges, a
-  // fraction f of each edge away from it (f = 1/2, 1/4, ..., the largest proven free), joined by
-  // a straight motion. Near obstacles random pairs rarely land on both sides of one corner; this
-  // is where a path tightens around them. f <= 1/2 keeps the cuts of neighbouring corners apart,
-  // so every corner is tried at once.
-  cancel.ThrowIfStopped();
+ private:
+  // A corner cut (CutCorners): the points a fraction f of the corner's edges away from it, and
+  // the check of the motion that joins them.
   struct Cut {
     Config a;
     Config b;
@@ -359,67 +108,393 @@ void CutCorners(const Shortening& shortening) {
     bool free = false;
     int checks = 0;
   };
-  std::vector<Cut> cuts(q.size());
-  const double least_gain = kMinCornerGain * PathLength(edges);
-  ParallelFor(threads, q.size() - 2, [&](size_t k) {
+
+  EdgeReport CheckMotion(const Config& a, const Config& b) const {
+    return Check(checker_, a, b, request_.safety, lazy_);
+  }
+  bool MayTake(const EdgeReport& report) const {
+    return hgraph::MayTake(report, request_.safety, lazy_);
+  }
+  // The motions joining the neighbours of the waypoints `tried`: reports the caller knows where
+  // they settle the question (from_caller), checks otherwise.
+  std::vector<EdgeReport> JoinNeighbours(const std::vector<size_t>& tried,
+                                         std::vector<char>* from_caller) const;
+  // Drops the waypoints `drops` (ascending), each one's two edges replaced by `reports`.
+  void Drop(const std::vector<size_t>& drops, std::vector<EdgeReport>* reports,
+            std::vector<char>* settled);
+  // Edge index and fraction of a position `s` along the path.
+  void Locate(double s, size_t* edge, double* t) const;
+  // Up to kShortcutBatch random pairs that would gain if free, counting `attempt` up to
+  // `attempts`.
+  std::vector<Candidate> DrawBatch(int attempts, int* attempt);
+  // The partial shortcut of `c` moving `part` straight from c.a to c.b (its points), and its
+  // length; `along` is the path's length from a to b.
+  double Partial(const Space::Part& part, double along, Candidate* c) const;
+  // Checks each candidate's motions in order, up to the first not proven free.
+  void CheckBatch(std::vector<Candidate>* batch) const;
+  // The free candidates that gain most, no two sharing an edge of the path, from the path's end
+  // backwards (so that applying them in turn keeps the others' edge indices valid).
+  static std::vector<size_t> TakeFromBatch(const std::vector<Candidate>& batch);
+  // Replaces the stretch of the path between c.a and c.b by the candidate's motions.
+  void Splice(Candidate& c);
+  // The corner cut at every interior waypoint: the largest f proven free, or none.
+  std::vector<Cut> FindCuts() const;
+  // The path with the free cuts taken.
+  void ApplyCuts(std::vector<Cut>& cuts);
+
+  const MotionChecker& checker_;
+  const ShortcutRequest& request_;
+  const CancelToken& cancel_;
+  const Space& space_;
+  const int threads_;
+  const bool lazy_;
+  ShortcutResult out_;
+  std::vector<Config>& q_ = out_.path.waypoints;
+  std::vector<int>& ids_ = out_.ids;
+  std::vector<WaypointSource>& sources_ = out_.sources;
+  std::vector<EdgeReport>& edges_ = out_.edges;
+  std::mt19937_64 rng_;
+};
+
+Shortening::Shortening(const MotionChecker& checker, const ShortcutRequest& request,
+                       const CancelToken& cancel)
+    : checker_(checker),
+      request_(request),
+      cancel_(cancel),
+      space_(checker.space()),
+      threads_(request.threads == 0 ? DefaultConcurrency() : std::max(1, request.threads)),
+      lazy_(request.lazy && request.safety <= 0),
+      rng_(request.seed) {
+  out_.path = request.path;
+  HGRAPH_CHECK(q_.size() >= 2);
+  ids_ = request.ids;
+  if (ids_.size() != q_.size()) ids_.assign(q_.size(), -1);
+  sources_ = request.sources;
+  if (sources_.size() != q_.size()) sources_.assign(q_.size(), WaypointSource{});
+  edges_ = request.edges;
+  if (edges_.size() != q_.size() - 1) {
+    edges_.assign(q_.size() - 1, EdgeReport{});
+    for (size_t j = 0; j + 1 < q_.size(); ++j) edges_[j].length = space_.Distance(q_[j], q_[j + 1]);
+  }
+}
+
+void Shortening::DropWaypoints() {
+  // Waypoints whose neighbours connect directly. A pass checks every waypoint not yet settled
+  // and drops those whose check passed, left to right, never two neighbours (the second one's
+  // check joined a waypoint the first one removed); a drop unsettles the neighbours.
+  std::vector<char> settled(q_.size(), request_.corners_only ? 1 : 0);
+  for (;;) {
+    cancel_.ThrowIfStopped();
+    std::vector<size_t> tried;
+    for (size_t j = 1; j + 1 < q_.size(); ++j) {
+      if (settled[j]) continue;
+      if (space_.Distance(q_[j - 1], q_[j + 1]) >= edges_[j - 1].length + edges_[j].length) {
+        settled[j] = 1;
+        continue;
+      }
+      tried.push_back(j);
+    }
+    if (tried.empty()) break;
+    std::vector<char> from_caller;
+    std::vector<EdgeReport> joined = JoinNeighbours(tried, &from_caller);
+    std::vector<size_t> drops;
+    std::vector<EdgeReport> drop_reports;
+    for (size_t k = 0; k < tried.size(); ++k) {
+      const size_t j = tried[k];
+      if (!from_caller[k]) {
+        ++out_.edges_checked;
+        if (ids_[j - 1] >= 0 && ids_[j + 1] >= 0) {
+          out_.id_checks.emplace_back(ids_[j - 1], ids_[j + 1], joined[k]);
+        }
+      }
+      settled[j] = 1;
+      if (!MayTake(joined[k])) continue;
+      if (!drops.empty() && drops.back() + 1 == j) {
+        settled[j] = 0;  // its left neighbour goes: try again with the new one
+        continue;
+      }
+      drops.push_back(j);
+      drop_reports.push_back(std::move(joined[k]));
+    }
+    Drop(drops, &drop_reports, &settled);
+  }
+}
+
+std::vector<EdgeReport> Shortening::JoinNeighbours(const std::vector<size_t>& tried,
+                                                   std::vector<char>* from_caller) const {
+  std::vector<EdgeReport> joined(tried.size());
+  from_caller->assign(tried.size(), 0);
+  for (size_t k = 0; k < tried.size(); ++k) {
+    const size_t j = tried[k];
+    if (!request_.known || ids_[j - 1] < 0 || ids_[j + 1] < 0) continue;
+    const EdgeReport* known = request_.known(ids_[j - 1], ids_[j + 1]);
+    // Taken when it settles the question: free, or not free whatever the safety.
+    if (known == nullptr ||
+        (!MayTake(*known) && known->state != EdgeState::kInvalid && known->usable())) {
+      continue;
+    }
+    joined[k] = *known;
+    (*from_caller)[k] = 1;
+  }
+  ParallelFor(threads_, tried.size(), [&](size_t k) {
+    if ((*from_caller)[k] || cancel_.stopped()) return;
+    const size_t j = tried[k];
+    joined[k] = CheckMotion(q_[j - 1], q_[j + 1]);
+  });
+  cancel_.ThrowIfStopped();
+  return joined;
+}
+
+void Shortening::Drop(const std::vector<size_t>& drops, std::vector<EdgeReport>* reports,
+                      std::vector<char>* settled) {
+  for (size_t d = drops.size(); d-- > 0;) {
+    const size_t j = drops[d];
+    const auto at = static_cast<std::ptrdiff_t>(j);
+    q_.erase(q_.begin() + at);
+    ids_.erase(ids_.begin() + at);
+    sources_.erase(sources_.begin() + at);
+    edges_.erase(edges_.begin() + at);
+    edges_[j - 1] = std::move((*reports)[d]);
+    settled->erase(settled->begin() + at);
+    (*settled)[j - 1] = 0;
+    (*settled)[j] = 0;
+    ++out_.accepted;
+  }
+}
+
+void Shortening::TryRandomPairs() {
+  const int attempts =
+      request_.corners_only ? 0
+      : request_.attempts > 0
+          ? request_.attempts
+          : std::max(kMinAttempts, kAttemptsPerWaypoint * static_cast<int>(q_.size()));
+  for (int attempt = 0; attempt < attempts && q_.size() >= 2;) {
+    cancel_.ThrowIfStopped();
+    if (PathLength(edges_) <= 0) break;
+    std::vector<Candidate> batch = DrawBatch(attempts, &attempt);
+    if (batch.empty()) continue;
+    CheckBatch(&batch);
+    for (size_t k : TakeFromBatch(batch)) Splice(batch[k]);
+  }
+}
+
+void Shortening::Locate(double s, size_t* edge, double* t) const {
+  double at = 0;
+  for (size_t j = 0; j < edges_.size(); ++j) {
+    if (s <= at + edges_[j].length || j + 1 == edges_.size()) {
+      *edge = j;
+      *t = edges_[j].length > 0 ? std::clamp((s - at) / edges_[j].length, 0.0, 1.0) : 0.0;
+      return;
+    }
+    at += edges_[j].length;
+  }
+}
+
+std::vector<Candidate> Shortening::DrawBatch(int attempts, int* attempt) {
+  const std::vector<Space::Part> parts = space_.Parts();
+  std::uniform_real_distribution<double> share(0.0, 1.0);
+  std::uniform_real_distribution<double> position(0.0, PathLength(edges_));
+  std::vector<Candidate> batch;
+  for (int drawn = 0; drawn < kShortcutBatch && *attempt < attempts; ++drawn, ++*attempt) {
+    const bool partial =
+        request_.partial > 0 && parts.size() >= 2 && share(rng_) < request_.partial;
+    double s0 = position(rng_);
+    double s1 = position(rng_);
+    if (s0 > s1) std::swap(s0, s1);
+    Candidate c;
+    Locate(s0, &c.e0, &c.t0);
+    Locate(s1, &c.e1, &c.t1);
+    if (c.e0 == c.e1) continue;  // one straight edge: nothing to gain
+    c.a = space_.Interpolate(q_[c.e0], q_[c.e0 + 1], c.t0);
+    c.b = space_.Interpolate(q_[c.e1], q_[c.e1 + 1], c.t1);
+    // What the stretch from a to b costs now, along the path.
+    double along = (1 - c.t0) * edges_[c.e0].length + c.t1 * edges_[c.e1].length;
+    for (size_t j = c.e0 + 1; j < c.e1; ++j) along += edges_[j].length;
+    double cost = 0;
+    if (partial && along > 0) {
+      const Space::Part part =
+          parts[std::uniform_int_distribution<size_t>(0, parts.size() - 1)(rng_)];
+      cost = Partial(part, along, &c);
+    } else {
+      cost = space_.Distance(c.a, c.b);
+    }
+    if (cost >= along * (1 - 1e-9)) continue;
+    c.gain = along - cost;
+    batch.push_back(std::move(c));
+  }
+  return batch;
+}
+
+double Shortening::Partial(const Space::Part& part, double along, Candidate* c) const {
+  // The part moves straight from a to b, as far along at each waypoint as the path is.
+  double at = (1 - c->t0) * edges_[c->e0].length;
+  double cost = 0;
+  const Config* previous = &c->a;
+  c->points.reserve(c->e1 - c->e0);
+  for (size_t j = c->e0 + 1; j <= c->e1; ++j) {
+    Config m = q_[j];
+    m.segment(part.offset, part.size) =
+        space_.Interpolate(c->a, c->b, at / along).segment(part.offset, part.size);
+    cost += space_.Distance(*previous, m);
+    c->points.push_back(std::move(m));
+    previous = &c->points.back();
+    at += edges_[j].length;
+  }
+  return cost + space_.Distance(*previous, c->b);
+}
+
+void Shortening::CheckBatch(std::vector<Candidate>* batch) const {
+  ParallelFor(threads_, batch->size(), [&](size_t k) {
+    Candidate& c = (*batch)[k];
+    for (size_t j = 0; j <= c.points.size(); ++j) {
+      if (cancel_.stopped()) return;
+      const Config& from = j == 0 ? c.a : c.points[j - 1];
+      const Config& to = j < c.points.size() ? c.points[j] : c.b;
+      c.reports.push_back(CheckMotion(from, to));
+      if (!MayTake(c.reports.back())) return;
+    }
+    c.free = true;
+  });
+  cancel_.ThrowIfStopped();
+}
+
+std::vector<size_t> Shortening::TakeFromBatch(const std::vector<Candidate>& batch) {
+  std::vector<size_t> order(batch.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(),
+                   [&](size_t x, size_t y) { return batch[x].gain > batch[y].gain; });
+  std::vector<size_t> taken;
+  for (size_t k : order) {
+    if (!batch[k].free) continue;
+    const bool overlaps = std::any_of(taken.begin(), taken.end(), [&](size_t o) {
+      return !(batch[k].e1 < batch[o].e0 || batch[o].e1 < batch[k].e0);
+    });
+    if (!overlaps) taken.push_back(k);
+  }
+  std::sort(taken.begin(), taken.end(),
+            [&](size_t x, size_t y) { return batch[x].e0 > batch[y].e0; });
+  return taken;
+}
+
+void Shortening::Splice(Candidate& c) {
+  // The cut edges' pieces up to a and from b.
+  EdgeReport head = Piece(space_, edges_[c.e0], q_[c.e0], c.a);
+  EdgeReport tail = Piece(space_, edges_[c.e1], c.b, q_[c.e1 + 1]);
+  const auto keep = static_cast<std::ptrdiff_t>(c.e0 + 1);
+  std::vector<Config> nq(q_.begin(), q_.begin() + keep);
+  std::vector<int> ni(ids_.begin(), ids_.begin() + keep);
+  std::vector<WaypointSource> ns(sources_.begin(), sources_.begin() + keep);
+  std::vector<EdgeReport> ne(edges_.begin(), edges_.begin() + keep - 1);
+  // Zero-length pieces (a point at a waypoint) are left out.
+  if (head.length > 0) {
+    nq.push_back(c.a);
+    ni.push_back(-1);
+    ns.push_back(SourceBetween(sources_[c.e0], sources_[c.e0 + 1], c.t0));
+    ne.push_back(std::move(head));
+  }
+  for (size_t j = 0; j < c.points.size(); ++j) {
+    nq.push_back(std::move(c.points[j]));
+    ni.push_back(-1);
+    ns.emplace_back();
+    ne.push_back(std::move(c.reports[j]));
+  }
+  ne.push_back(std::move(c.reports.back()));
+  if (tail.length > 0) {
+    nq.push_back(c.b);
+    ni.push_back(-1);
+    ns.push_back(SourceBetween(sources_[c.e1], sources_[c.e1 + 1], c.t1));
+    ne.push_back(std::move(tail));
+  }
+  const auto rest = static_cast<std::ptrdiff_t>(c.e1 + 1);
+  nq.insert(nq.end(), q_.begin() + rest, q_.end());
+  ni.insert(ni.end(), ids_.begin() + rest, ids_.end());
+  ns.insert(ns.end(), sources_.begin() + rest, sources_.end());
+  ne.insert(ne.end(), edges_.begin() + rest, edges_.end());
+  q_ = std::move(nq);
+  ids_ = std::move(ni);
+  sources_ = std::move(ns);
+  edges_ = std::move(ne);
+  ++out_.accepted;
+}
+
+void Shortening::CutCorners() {
+  // Corners cut (corners_only): each interior waypoint is replaced by two points on its edges, a
+  // fraction f of each edge away from it (f = 1/2, 1/4, ..., the largest proven free), joined by
+  // a straight motion. Near obstacles random pairs rarely land on both sides of one corner; this
+  // is where a path tightens around them. f <= 1/2 keeps the cuts of neighbouring corners apart,
+  // so every corner is tried at once.
+  if (q_.size() < 3) return;
+  cancel_.ThrowIfStopped();
+  std::vector<Cut> cuts = FindCuts();
+  ApplyCuts(cuts);
+}
+
+std::vector<Shortening::Cut> Shortening::FindCuts() const {
+  std::vector<Cut> cuts(q_.size());
+  const double least_gain = kMinCornerGain * PathLength(edges_);
+  ParallelFor(threads_, q_.size() - 2, [&](size_t k) {
     const size_t j = k + 1;
-    if (cancel.stopped()) return;
+    if (cancel_.stopped()) return;
     for (double f = 0.5; f >= kMinCornerCut; f /= 2) {
       Cut& cut = cuts[j];
       cut.f = f;
-      cut.a = space.Interpolate(q[j], q[j - 1], f);
-      cut.b = space.Interpolate(q[j], q[j + 1], f);
-      if (space.Distance(cut.a, cut.b) >=
-          f * (edges[j - 1].length + edges[j].length) * (1 - 1e-9) - least_gain) {
+      cut.a = space_.Interpolate(q_[j], q_[j - 1], f);
+      cut.b = space_.Interpolate(q_[j], q_[j + 1], f);
+      if (space_.Distance(cut.a, cut.b) >=
+          f * (edges_[j - 1].length + edges_[j].length) * (1 - 1e-9) - least_gain) {
         return;  // a straight corner, or a cut too small to matter
       }
-      cut.report = Check(checker, cut.a, cut.b, request.safety, lazy);
+      cut.report = CheckMotion(cut.a, cut.b);
       ++cut.checks;
-      cut.free = MayTake(cut.report, request.safety, lazy);
+      cut.free = MayTake(cut.report);
       if (cut.free) return;
     }
   });
-  cancel.ThrowIfStopped();
-  std::vector<Config> nq{q.front()};
-  std::vector<int> ni{ids.front()};
-  std::vector<WaypointSource> ns{sources.front()};
+  cancel_.ThrowIfStopped();
+  return cuts;
+}
+
+void Shortening::ApplyCuts(std::vector<Cut>& cuts) {
+  std::vector<Config> nq{q_.front()};
+  std::vector<int> ni{ids_.front()};
+  std::vector<WaypointSource> ns{sources_.front()};
   std::vector<EdgeReport> ne;
   // Edge j - 1 of the path, from the previous corner's cut (if any) to this one's (if any): the
   // edge itself, or a piece of it.
   const auto add_edge = [&](size_t j, const Config& to) {
     const bool whole = !cuts[j - 1].free && !cuts[j].free;
-    ne.push_back(whole ? edges[j - 1] : Piece(space, edges[j - 1], nq.back(), to));
+    ne.push_back(whole ? edges_[j - 1] : Piece(space_, edges_[j - 1], nq.back(), to));
   };
-  for (size_t j = 1; j + 1 < q.size(); ++j) {
-    out.edges_checked += cuts[j].checks;
+  for (size_t j = 1; j + 1 < q_.size(); ++j) {
+    out_.edges_checked += cuts[j].checks;
     if (!cuts[j].free) {
-      add_edge(j, q[j]);
-      nq.push_back(q[j]);
-      ni.push_back(ids[j]);
-      ns.push_back(sources[j]);
+      add_edge(j, q_[j]);
+      nq.push_back(q_[j]);
+      ni.push_back(ids_[j]);
+      ns.push_back(sources_[j]);
       continue;
     }
     // Two cuts at the middle of one edge meet there: the point is kept once.
-    if (space.Distance(nq.back(), cuts[j].a) > 0) {
+    if (space_.Distance(nq.back(), cuts[j].a) > 0) {
       add_edge(j, cuts[j].a);
       nq.push_back(cuts[j].a);
       ni.push_back(-1);
-      ns.push_back(SourceBetween(sources[j], sources[j - 1], cuts[j].f));
+      ns.push_back(SourceBetween(sources_[j], sources_[j - 1], cuts[j].f));
     }
     ne.push_back(std::move(cuts[j].report));
     nq.push_back(cuts[j].b);
     ni.push_back(-1);
-    ns.push_back(SourceBetween(sources[j], sources[j + 1], cuts[j].f));
-    ++out.accepted;
+    ns.push_back(SourceBetween(sources_[j], sources_[j + 1], cuts[j].f));
+    ++out_.accepted;
   }
-  add_edge(q.size() - 1, q.back());
-  nq.push_back(q.back());
-  ni.push_back(ids.back());
-  ns.push_back(sources.back());
-  q = std::move(nq);
-  ids = std::move(ni);
-  sources = std::move(ns);
-  edges = std::move(ne);
+  add_edge(q_.size() - 1, q_.back());
+  nq.push_back(q_.back());
+  ni.push_back(ids_.back());
+  ns.push_back(sources_.back());
+  q_ = std::move(nq);
+  ids_ = std::move(ni);
+  sources_ = std::move(ns);
+  edges_ = std::move(ne);
 }
 
 }  // namespace
@@ -448,37 +523,11 @@ WaypointSource SourceBetween(const WaypointSource& a, const WaypointSource& b, d
 
 ShortcutResult ShortcutCertified(const MotionChecker& checker, const ShortcutRequest& request,
                                  const CancelToken& cancel) {
-  const Space& space = checker.space();
-  const int threads = request.threads == 0 ? DefaultConcurrency() : std::max(1, request.threads);
-  const bool lazy = request.lazy && request.safety <= 0;
-  ShortcutResult out;
-  out.path = request.path;
-  std::vector<Config>& q = out.path.waypoints;
-  HGRAPH_CHECK(q.size() >= 2);
-  std::vector<int>& ids = out.ids;
-  ids = request.ids;
-  if (ids.size() != q.size()) ids.assign(q.size(), -1);
-  std::vector<WaypointSource>& sources = out.sources;
-  sources = request.sources;
-  if (sources.size() != q.size()) sources.assign(q.size(), WaypointSource{});
-  std::vector<EdgeReport>& edges = out.edges;
-  edges = request.edges;
-  if (edges.size() != q.size() - 1) {
-    edges.assign(q.size() - 1, EdgeReport{});
-    for (size_t j = 0; j + 1 < q.size(); ++j) edges[j].length = space.Distance(q[j], q[j + 1]);
-  }
-
-  const Shortening shortening{.checker = checker,
-                              .request = request,
-                              .cancel = cancel,
-                              .space = space,
-                              .threads = threads,
-                              .lazy = lazy,
-                              .out = out};
-  DropWaypoints(shortening);
-  TryRandomPairs(shortening);
-  if (request.corners_only && q.size() >= 3) CutCorners(shortening);
-  return out;
+  Shortening shortening(checker, request, cancel);
+  shortening.DropWaypoints();
+  shortening.TryRandomPairs();
+  if (request.corners_only) shortening.CutCorners();
+  return shortening.Finish();
 }
 
 }  // namespace hgraph

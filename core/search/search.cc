@@ -22,46 +22,275 @@ constexpr double kThresholdBracket = 1.02;
 constexpr int kMaxThresholdTests = 12;
 constexpr double kFirstCapDivisor = 16;
 
-struct Tree {
-  std::vector<double> value;
-  std::vector<int> via_edge;  // edge into the node on the best path, or -1
+// One entry of the lazy open list: `node` reached through `edge` from a settled node whose value
+// is `parent_value`; `key` is the entry's value (kSum: cost so far plus cost to go; widest:
+// width so far) from the edge's bound or its exact value. Entries of equal key (many, under a
+// widest search's cap) go by `rank`: an edge that settles the node without a check first, then
+// one checked valid, then the others (widest searches only); and then by `tie`, the node's length
+// to go, and by node and edge ids.
+struct LazyEntry {
+  double key = 0;
+  double parent_value = 0;
+  int node = 0;
+  int edge = -1;
+  int rank = 0;
+  double tie = 0;
 };
 
-// A* (Dijkstra without a heuristic) from the start node; `cost` returns infinity for an edge the
-// search must not use.
-template <typename Cost>
-Tree ShortestPaths(const HGraph& graph, const Cost& cost, const std::vector<double>* cost_to_go) {
-  Tree tree{std::vector<double>(graph.num_nodes(), kInf), std::vector<int>(graph.num_nodes(), -1)};
-  std::vector<char> closed(graph.num_nodes(), 0);
-  const auto h = [&](int n) { return cost_to_go != nullptr ? (*cost_to_go)[n] : 0.0; };
-  using Item = std::pair<double, int>;
-  std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;
-  tree.value[graph.start()] = 0;
-  queue.emplace(h(graph.start()), graph.start());
-  while (!queue.empty()) {
-    const int u = queue.top().second;
-    queue.pop();
-    if (closed[u]) continue;
-    closed[u] = 1;
-    if (u == graph.goal()) break;
-    const double d = tree.value[u];
-    for (const auto& [v, e] : graph.neighbours(u)) {
-      if (closed[v]) continue;
-      const double c = cost(e);
-      if (!(c < kInf)) continue;
-      const double nd = d + c;
-      if (nd < tree.value[v]) {
-        tree.value[v] = nd;
-        tree.via_edge[v] = e;
-        queue.emplace(nd + h(v), v);
+// The lazy search over one combine rule. `kWidest`: maximise the minimum edge value, each capped
+// at `cap`; otherwise minimise the sum. `see` returns NaN (or +inf for sums) for unusable edges.
+// `target` is what a sum search asks `evaluate` to decide (a widest search asks for the key).
+// Lives for one Run; not copyable.
+template <bool kWidest>
+class LazySearch {
+ public:
+  LazySearch(const HGraph& graph, const SearchEdgeFn& see, const ExactFn& exact,
+             const EvaluateFn& evaluate, const std::vector<double>* cost_to_go,
+             const std::vector<double>* length_to_go, double cap, double target, int batch,
+             LazySearchStats* stats)
+      : graph_(graph),
+        see_(see),
+        exact_(exact),
+        evaluate_(evaluate),
+        cost_to_go_(cost_to_go),
+        length_to_go_(length_to_go),
+        cap_(cap),
+        target_(target),
+        batch_(batch),
+        stats_(stats),
+        value_(graph.num_nodes(), kWidest ? -1.0 : kInf),
+        via_edge_(graph.num_nodes(), -1),
+        closed_(graph.num_nodes(), 0) {}
+  LazySearch(const LazySearch&) = delete;
+  LazySearch& operator=(const LazySearch&) = delete;
+
+  SearchResult Run() {
+    open_.push(LazyEntry{.key = kWidest ? kInf : ToGo(graph_.start()),
+                         .parent_value = kWidest ? kInf : 0.0,
+                         .node = graph_.start(),
+                         .edge = -1});
+    while (!open_.empty()) {
+      const LazyEntry top = open_.top();
+      open_.pop();
+      if (closed_[top.node]) continue;
+      if (top.edge >= 0 && !Settles(top.edge, see_(top.edge), top.key)) {
+        // Check this edge and the next most promising unsettled ones together.
+        Gather(top);
+        EvaluatePending();
+        continue;
       }
+      if (Settle(top)) break;
+    }
+    if (!closed_[graph_.goal()]) return SearchResult{};
+    return TracePath(graph_, via_edge_, value_[graph_.goal()]);
+  }
+
+ private:
+  // The open list's order: Worse(a, b) when a comes out after b.
+  struct Worse {
+    bool operator()(const LazyEntry& a, const LazyEntry& b) const {
+      if (a.key != b.key) {
+        if constexpr (kWidest) {
+          return a.key < b.key;  // max-heap on width
+        } else {
+          return a.key > b.key;  // min-heap on cost
+        }
+      }
+      // A widest search's many entries of equal key (its cap) go by what is known of them, which
+      // decides only how much it checks: what it returns is a width, or whether one is reached.
+      // A sum search's path is the answer, so its ties go by one fixed rule whatever is known
+      // (length to go, then node and edge ids): the same path whichever queries came before.
+      if (kWidest && a.rank != b.rank) return a.rank > b.rank;
+      if (a.tie != b.tie) return a.tie > b.tie;
+      if (a.node != b.node) return a.node > b.node;
+      return a.edge > b.edge;
+    }
+  };
+
+  double ToGo(int n) const { return cost_to_go_ != nullptr ? (*cost_to_go_)[n] : 0.0; }
+
+  // Key of an entry through an edge of value `value` from a parent of value `parent`; NaN if the
+  // edge is unusable.
+  double KeyOf(double parent, double value, int node) const {
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    if (std::isnan(value)) return nan;
+    if constexpr (kWidest) {
+      return std::min({parent, value, cap_});
+    } else {
+      if (!(value < kInf)) return nan;
+      return parent + value + ToGo(node);
     }
   }
-  return tree;
+
+  // Whether the edge, seen as `s`, settles an entry of key `key` without a check: it is exact, or
+  // its floor is its bound (kSum) or reaches the key (widest: then min(parent, width, cap) is
+  // the key, whatever the exact width).
+  bool Settles(int e, const SearchEdge& s, double key) const {
+    if (exact_(e)) return true;
+    if constexpr (kWidest) {
+      return s.floor > 0 && s.floor >= key;
+    } else {
+      return s.floor == s.value;
+    }
+  }
+
+  // Fills the entry's key and order from the edge as seen now; false if the edge is unusable.
+  bool Place(LazyEntry& entry) const {
+    const SearchEdge s = see_(entry.edge);
+    entry.key = KeyOf(entry.parent_value, s.value, entry.node);
+    if (std::isnan(entry.key)) return false;
+    entry.rank = Settles(entry.edge, s, entry.key) ? 0 : s.checked ? 1 : 2;
+    entry.tie = length_to_go_ != nullptr ? (*length_to_go_)[entry.node] : 0.0;
+    return true;
+  }
+
+  // Takes `top` and the next most promising entries that need a check off the open list, up to
+  // `batch` of them, one per node (if the first settles the node, a second would be checked for
+  // nothing): the pending entries.
+  void Gather(const LazyEntry& top) {
+    pending_.assign(1, top);
+    set_aside_.clear();
+    while (static_cast<int>(pending_.size()) < batch_ && !open_.empty()) {
+      const LazyEntry& next = open_.top();
+      if (closed_[next.node]) {
+        open_.pop();
+        continue;
+      }
+      if (next.edge < 0 || Settles(next.edge, see_(next.edge), next.key)) break;
+      const bool same_node = std::any_of(pending_.begin(), pending_.end(),
+                                         [&](const LazyEntry& p) { return p.node == next.node; });
+      (same_node ? set_aside_ : pending_).push_back(next);
+      open_.pop();
+    }
+    for (const LazyEntry& entry : set_aside_) open_.push(entry);
+  }
+
+  // Evaluates the pending entries' edges, once each with the largest target asked of it; each is
+  // exact then, or its bounds are tighter: it goes back with its new key.
+  void EvaluatePending() {
+    wanted_.clear();
+    for (const LazyEntry& entry : pending_) {
+      wanted_.emplace_back(entry.edge, kWidest ? entry.key : target_);
+    }
+    std::sort(wanted_.begin(), wanted_.end());
+    to_check_.clear();
+    targets_.clear();
+    for (const auto& [e, t] : wanted_) {
+      if (!to_check_.empty() && to_check_.back() == e) {
+        targets_.back() = std::fmax(targets_.back(), t);  // the larger key asks more
+        continue;
+      }
+      to_check_.push_back(e);
+      targets_.push_back(t);
+    }
+    evaluate_(to_check_, targets_);
+    if (stats_ != nullptr) {
+      ++stats_->evaluations;
+      stats_->edges_evaluated += static_cast<int64_t>(to_check_.size());
+    }
+    for (LazyEntry entry : pending_) {
+      if (Place(entry)) open_.push(entry);
+    }
+  }
+
+  // Closes the entry's node at its value; returns true if it is the goal, else opens its
+  // neighbours.
+  bool Settle(const LazyEntry& top) {
+    closed_[top.node] = 1;
+    value_[top.node] =
+        kWidest ? top.key : top.parent_value + (top.edge >= 0 ? see_(top.edge).value : 0.0);
+    via_edge_[top.node] = top.edge;
+    if (top.node == graph_.goal()) return true;
+    for (const auto& [v, e] : graph_.neighbours(top.node)) {
+      if (closed_[v]) continue;
+      LazyEntry entry{.parent_value = value_[top.node], .node = v, .edge = e};
+      if (Place(entry)) open_.push(entry);
+    }
+    return false;
+  }
+
+  const HGraph& graph_;
+  const SearchEdgeFn& see_;
+  const ExactFn& exact_;
+  const EvaluateFn& evaluate_;
+  const std::vector<double>* cost_to_go_;
+  const std::vector<double>* length_to_go_;
+  const double cap_;
+  const double target_;
+  const int batch_;
+  LazySearchStats* stats_;
+  std::priority_queue<LazyEntry, std::vector<LazyEntry>, Worse> open_;
+  std::vector<double> value_;
+  std::vector<int> via_edge_;
+  std::vector<char> closed_;
+  // Scratch of Gather and EvaluatePending, kept to reuse their memory.
+  std::vector<LazyEntry> pending_;
+  std::vector<LazyEntry> set_aside_;
+  std::vector<std::pair<int, double>> wanted_;
+  std::vector<int> to_check_;
+  std::vector<double> targets_;
+};
+
+}  // namespace
+
+SearchResult FindBestPathLazy(const HGraph& graph, const Measure& measure, const SearchEdgeFn& see,
+                              const ExactFn& exact, const EvaluateFn& evaluate,
+                              const std::vector<double>* cost_to_go,
+                              const std::vector<double>* length_to_go, int batch,
+                              LazySearchStats* stats) {
+  batch = std::max(1, batch);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  if (measure.combine() == Measure::Combine::kSum) {
+    return LazySearch<false>(graph, see, exact, evaluate, cost_to_go, nullptr, kInf,
+                             measure.clearance_target(), batch, stats)
+        .Run();
+  }
+  // The widest path's width W, exactly. Whether W >= t needs of an edge only a proof that it
+  // keeps t (cheap where clearance is well above t) or a point below t, never its exact width.
+  // So tests at thresholds narrow [lo, hi] around W first: lo the width of a path of proven
+  // floors, hi the widest path under the bounds, each test at their geometric mean. Then a
+  // search whose widths are capped at hi finds W exactly, and needs exact widths only of the
+  // edges narrower than hi, which is then close to W.
+  const SearchEdgeFn proven = [&](int e) {
+    const SearchEdge s = see(e);
+    return SearchEdge{.value = s.floor > 0 ? s.floor : nan, .length = s.length};
+  };
+  double lo = std::max(0.0, WidestPathValue(graph, proven));
+  double hi = WidestPathValue(graph, see);
+  if (hi < 0) return SearchResult{};
+  for (int test = 0; test < kMaxThresholdTests && hi > lo * kThresholdBracket; ++test) {
+    const double tau = lo > 0 ? std::sqrt(lo * hi) : hi / kFirstCapDivisor;
+    const SearchEdgeFn at_tau = [&](int e) {
+      SearchEdge s = see(e);
+      if (!(s.value >= tau)) s.value = nan;
+      return s;
+    };
+    const SearchResult path = LazySearch<true>(graph, at_tau, exact, evaluate, nullptr,
+                                               length_to_go, tau, nan, batch, stats)
+                                  .Run();
+    if (path.found) {
+      lo = std::max(tau, WidestPathValue(graph, proven));
+    } else {
+      hi = tau;
+    }
+    hi = std::min(hi, WidestPathValue(graph, see));
+  }
+  const SearchResult widest =
+      LazySearch<true>(graph, see, exact, evaluate, nullptr, length_to_go, hi, nan, batch, stats)
+          .Run();
+  if (!widest.found) return widest;
+  // Then the shortest of the widest paths, lazily again: an edge proven that wide is usable at
+  // its length.
+  const double width = widest.value;
+  const SearchEdgeFn among_widest = ShortestAmongWidest(see, width);
+  SearchResult result = LazySearch<false>(graph, among_widest, exact, evaluate, length_to_go,
+                                          nullptr, kInf, width, batch, stats)
+                            .Run();
+  if (!result.found) return widest;  // cannot happen: the widest path itself qualifies
+  result.value = width;
+  return result;
 }
 
-// Largest achievable minimum edge width from start to goal (the widest path value), or -1 if the
-// goal cannot be reached.
 double WidestPathValue(const HGraph& graph, const SearchEdgeFn& edge) {
   std::vector<double> width(graph.num_nodes(), -1.0);
   using Item = std::pair<double, int>;
@@ -86,8 +315,7 @@ double WidestPathValue(const HGraph& graph, const SearchEdgeFn& edge) {
   return width[graph.goal()];
 }
 
-// The start-goal path found by following `via_edge` back from the goal, with its value.
-SearchResult PathTo(const HGraph& graph, const std::vector<int>& via_edge, double value) {
+SearchResult TracePath(const HGraph& graph, const std::vector<int>& via_edge, double value) {
   SearchResult result;
   int node = graph.goal();
   result.nodes.push_back(node);
@@ -106,265 +334,21 @@ SearchResult PathTo(const HGraph& graph, const std::vector<int>& via_edge, doubl
   return result;
 }
 
-SearchResult Extract(const HGraph& graph, const Tree& tree) {
-  if (tree.value[graph.goal()] == kInf) return SearchResult{};
-  return PathTo(graph, tree.via_edge, tree.value[graph.goal()]);
-}
-
-// One entry of the lazy open list: `node` reached through `edge` from a settled node whose value
-// is `parent_value`; `key` is the entry's value (kSum: cost so far plus cost to go; widest:
-// width so far) from the edge's bound or its exact value. Entries of equal key (many, under a
-// widest search's cap) go by `rank`: an edge that settles the node without a check first, then
-// one checked valid, then the others (widest searches only); and then by `tie`, the node's length
-// to go, and by node and edge ids.
-struct LazyEntry {
-  double key = 0;
-  double parent_value = 0;
-  int node = 0;
-  int edge = -1;
-  int rank = 0;
-  double tie = 0;
-};
-
-// The lazy search over one combine rule. `kWidest`: maximise the minimum edge value, each capped
-// at `cap`; otherwise minimise the sum. `see` returns NaN (or +inf for sums) for unusable edges.
-// `target` is what a sum search asks `evaluate` to decide (a widest search asks for the key).
-template <bool kWidest>
-SearchResult LazySearch(const HGraph& graph, const SearchEdgeFn& see, const ExactFn& exact,
-                        const EvaluateFn& evaluate, const std::vector<double>* cost_to_go,
-                        const std::vector<double>* length_to_go, double cap, double target,
-                        int batch, LazySearchStats* stats) {
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  const auto h = [&](int n) { return cost_to_go != nullptr ? (*cost_to_go)[n] : 0.0; };
-  // Key of an entry through an edge of value `value` from a parent of value `parent`; NaN if the
-  // edge is unusable.
-  const auto key_of = [&](double parent, double value, int node) {
-    if (std::isnan(value)) return nan;
-    if constexpr (kWidest) {
-      return std::min({parent, value, cap});
-    } else {
-      if (!(value < kInf)) return nan;
-      return parent + value + h(node);
-    }
-  };
-  // Whether the edge, seen as `s`, settles an entry of key `key` without a check: it is exact, or
-  // its floor is its bound (kSum) or reaches the key (widest: then min(parent, width, cap) is
-  // the key, whatever the exact width).
-  const auto settles = [&](int e, const SearchEdge& s, double key) {
-    if (exact(e)) return true;
-    if constexpr (kWidest) {
-      return s.floor > 0 && s.floor >= key;
-    } else {
-      return s.floor == s.value;
-    }
-  };
-  // Fills the entry's key and order from the edge as seen now; false if the edge is unusable.
-  const auto place = [&](LazyEntry& entry) {
-    const SearchEdge s = see(entry.edge);
-    entry.key = key_of(entry.parent_value, s.value, entry.node);
-    if (std::isnan(entry.key)) return false;
-    entry.rank = settles(entry.edge, s, entry.key) ? 0 : s.checked ? 1 : 2;
-    entry.tie = length_to_go != nullptr ? (*length_to_go)[entry.node] : 0.0;
-    return true;
-  };
-  const auto worse = [](const LazyEntry& a, const LazyEntry& b) {
-    if (a.key != b.key) {
-      if constexpr (kWidest) {
-        return a.key < b.key;  // max-heap on width
-      } else {
-        return a.key > b.key;  // min-heap on cost
-      }
-    }
-    // A widest search's many entries of equal key (its cap) go by what is known of them, which
-    // decides only how much it checks: what it returns is a width, or whether one is reached.
-    // A sum search's path is the answer, so its ties go by one fixed rule whatever is known
-    // (length to go, then node and edge ids): the same path whichever queries came before.
-    if (kWidest && a.rank != b.rank) return a.rank > b.rank;
-    if (a.tie != b.tie) return a.tie > b.tie;
-    if (a.node != b.node) return a.node > b.node;
-    return a.edge > b.edge;
-  };
-  std::priority_queue<LazyEntry, std::vector<LazyEntry>, decltype(worse)> open(worse);
-  std::vector<double> value(graph.num_nodes(), kWidest ? -1.0 : kInf);
-  std::vector<int> via_edge(graph.num_nodes(), -1);
-  std::vector<char> closed(graph.num_nodes(), 0);
-  open.push(LazyEntry{.key = kWidest ? kInf : h(graph.start()),
-                      .parent_value = kWidest ? kInf : 0.0,
-                      .node = graph.start(),
-                      .edge = -1});
-  std::vector<LazyEntry> pending;
-  std::vector<LazyEntry> set_aside;
-  std::vector<std::pair<int, double>> wanted;
-  std::vector<int> to_check;
-  std::vector<double> targets;
-  while (!open.empty()) {
-    const LazyEntry top = open.top();
-    open.pop();
-    if (closed[top.node]) continue;
-    if (top.edge >= 0 && !settles(top.edge, see(top.edge), top.key)) {
-      // Check this edge and the next most promising unsettled ones together.
-      pending.assign(1, top);
-      set_aside.clear();
-      while (static_cast<int>(pending.size()) < batch && !open.empty()) {
-        const LazyEntry& next = open.top();
-        if (closed[next.node]) {
-          open.pop();
-          continue;
-        }
-        if (next.edge < 0 || settles(next.edge, see(next.edge), next.key)) break;
-        // One edge per node: if the first settles the node, a second would be checked for
-        // nothing.
-        const bool same_node = std::any_of(pending.begin(), pending.end(),
-                                           [&](const LazyEntry& p) { return p.node == next.node; });
-        (same_node ? set_aside : pending).push_back(next);
-        open.pop();
-      }
-      for (const LazyEntry& entry : set_aside) open.push(entry);
-      wanted.clear();
-      for (const LazyEntry& entry : pending) {
-        wanted.emplace_back(entry.edge, kWidest ? entry.key : target);
-      }
-      std::sort(wanted.begin(), wanted.end());
-      to_check.clear();
-      targets.clear();
-      for (const auto& [e, t] : wanted) {
-        if (!to_check.empty() && to_check.back() == e) {
-          targets.back() = std::fmax(targets.back(), t);  // the larger key asks more
-          continue;
-        }
-        to_check.push_back(e);
-        targets.push_back(t);
-      }
-      evaluate(to_check, targets);
-      if (stats != nullptr) {
-        ++stats->evaluations;
-        stats->edges_evaluated += static_cast<int64_t>(to_check.size());
-      }
-      // Each edge is exact now, or its bounds are tighter: it goes back with its new key.
-      for (LazyEntry entry : pending) {
-        if (place(entry)) open.push(entry);
-      }
-      continue;
-    }
-    closed[top.node] = 1;
-    value[top.node] =
-        kWidest ? top.key : top.parent_value + (top.edge >= 0 ? see(top.edge).value : 0.0);
-    via_edge[top.node] = top.edge;
-    if (top.node == graph.goal()) break;
-    for (const auto& [v, e] : graph.neighbours(top.node)) {
-      if (closed[v]) continue;
-      LazyEntry entry{.parent_value = value[top.node], .node = v, .edge = e};
-      if (place(entry)) open.push(entry);
-    }
-  }
-  if (!closed[graph.goal()]) return SearchResult{};
-  return PathTo(graph, via_edge, value[graph.goal()]);
-}
-
-}  // namespace
-
-SearchResult FindBestPathLazy(const HGraph& graph, const Measure& measure, const SearchEdgeFn& see,
-                              const ExactFn& exact, const EvaluateFn& evaluate,
-                              const std::vector<double>* cost_to_go,
-                              const std::vector<double>* length_to_go, int batch,
-                              LazySearchStats* stats) {
-  batch = std::max(1, batch);
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  if (measure.combine() == Measure::Combine::kSum) {
-    return LazySearch<false>(graph, see, exact, evaluate, cost_to_go, nullptr, kInf,
-                             measure.clearance_target(), batch, stats);
-  }
-  // The widest path's width W, exactly. Whether W >= t needs of an edge only a proof that it
-  // keeps t (cheap where clearance is well above t) or a point below t, never its exact width.
-  // So tests at thresholds narrow [lo, hi] around W first: lo the width of a path of proven
-  // floors, hi the widest path under the bounds, each test at their geometric mean. Then a
-  // search whose widths are capped at hi finds W exactly, and needs exact widths only of the
-  // edges narrower than hi, which is then close to W.
-  const SearchEdgeFn proven = [&](int e) {
+SearchEdgeFn ShortestAmongWidest(SearchEdgeFn see, double width) {
+  return [see = std::move(see), width](int e) {
     const SearchEdge s = see(e);
-    return SearchEdge{.value = s.floor > 0 ? s.floor : nan, .length = s.length};
-  };
-  double lo = std::max(0.0, WidestPathValue(graph, proven));
-  double hi = WidestPathValue(graph, see);
-  if (hi < 0) return SearchResult{};
-  for (int test = 0; test < kMaxThresholdTests && hi > lo * kThresholdBracket; ++test) {
-    const double tau = lo > 0 ? std::sqrt(lo * hi) : hi / kFirstCapDivisor;
-    const SearchEdgeFn at_tau = [&](int e) {
-      SearchEdge s = see(e);
-      if (!(s.value >= tau)) s.value = nan;
-      return s;
-    };
-    const SearchResult path = LazySearch<true>(graph, at_tau, exact, evaluate, nullptr,
-                                               length_to_go, tau, nan, batch, stats);
-    if (path.found) {
-      lo = std::max(tau, WidestPathValue(graph, proven));
-    } else {
-      hi = tau;
-    }
-    hi = std::min(hi, WidestPathValue(graph, see));
-  }
-  const SearchResult widest =
-      LazySearch<true>(graph, see, exact, evaluate, nullptr, length_to_go, hi, nan, batch, stats);
-  if (!widest.found) return widest;
-  // Then the shortest path whose every edge is at least that wide (the eager search's tie break),
-  // lazily again: an edge proven that wide is usable at its length.
-  const double width = widest.value;
-  const SearchEdgeFn wide_enough = [&](int e) {
-    const SearchEdge s = see(e);
+    const double nan = std::numeric_limits<double>::quiet_NaN();
     return SearchEdge{.value = !std::isnan(s.value) && s.value >= width ? s.length : nan,
                       .length = s.length,
                       .floor = s.floor >= width ? s.length : nan,
                       .checked = s.checked};
   };
-  SearchResult result = LazySearch<false>(graph, wide_enough, exact, evaluate, length_to_go,
-                                          nullptr, kInf, width, batch, stats);
-  if (!result.found) return widest;  // cannot happen: the widest path itself qualifies
-  result.value = width;
-  return result;
 }
 
 PathQuality EvaluateEdges(const HGraph& graph, const std::vector<int>& edges, double k) {
   QualityAccumulator accumulator(k);
   for (int e : edges) accumulator.Add(graph.edge(e).report);
   return accumulator.Finish();
-}
-
-SearchResult FindBestPath(const HGraph& graph, const Measure& measure, const SearchEdgeFn& edge,
-                          const std::vector<double>* cost_to_go) {
-  if (measure.combine() == Measure::Combine::kSum) {
-    const auto cost = [&edge](int e) {
-      const double value = edge(e).value;
-      return std::isnan(value) ? kInf : value;
-    };
-    return Extract(graph, ShortestPaths(graph, cost, cost_to_go));
-  }
-  // Maximise the bottleneck, then take the shortest path among those that attain it.
-  const double width = WidestPathValue(graph, edge);
-  if (width < 0) return SearchResult{};
-  const auto cost = [&edge, width](int e) {
-    const SearchEdge s = edge(e);
-    return !std::isnan(s.value) && s.value >= width ? s.length : kInf;
-  };
-  SearchResult result = Extract(graph, ShortestPaths(graph, cost, nullptr));
-  result.value = width;
-  return result;
-}
-
-SearchResult FindBestPath(const HGraph& graph, const MeasureSpec& spec) {
-  const auto measure = Measure::Make(spec);
-  const auto edge = [&](int e) {
-    const EdgeReport& report = graph.edge(e).report;
-    if (report.state != EdgeState::kValid || !report.usable() ||
-        (measure->needs_clearance() && !report.has_clearance)) {
-      return SearchEdge{.value = std::numeric_limits<double>::quiet_NaN(), .length = report.length};
-    }
-    return SearchEdge{.value = measure->EdgeValue(report), .length = report.length};
-  };
-  SearchResult result = FindBestPath(graph, *measure, edge);
-  if (!result.found) return result;
-  result.quality = EvaluateEdges(graph, result.edges, spec.k);
-  result.objective = measure->Objective(result.quality);
-  return result;
 }
 
 }  // namespace hgraph

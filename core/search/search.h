@@ -19,8 +19,6 @@ struct SearchResult {
   bool found = false;
   std::vector<int> nodes;  // start ... goal
   std::vector<int> edges;  // edge ids between consecutive nodes
-  PathQuality quality;     // filled by FindBestPath(graph, spec) only
-  double objective = 0;    // Objective(spec, quality), likewise
   // The path's value as the search saw it: its cost (kSum) or width (kBottleneck).
   double value = 0;
 };
@@ -37,17 +35,12 @@ struct SearchEdge {
 };
 using SearchEdgeFn = std::function<SearchEdge(int edge)>;
 
-// The best start-goal path under `measure`, edges seen through `edge`. `cost_to_go`, if not
-// null, holds per node a lower bound on the cost from it to the goal (consistent: an A*
-// heuristic; kSum only). found == false if the usable edges do not connect start and goal.
-SearchResult FindBestPath(const HGraph& graph, const Measure& measure, const SearchEdgeFn& edge,
-                          const std::vector<double>* cost_to_go = nullptr);
-
 // Lazy search (lazy weighted A*, and its widest-path analogue for bottleneck measures): an edge
 // enters the open list with its bound and is checked only when the search would settle a node
 // through it; then it goes back with its exact value, or with a tighter bound (a refinement in
 // steps, for bounds that are cheaper to tighten than to make exact). Returns the same optimum as
-// FindBestPath(graph, measure, see) on the checked graph, with far fewer checks: once a node is
+// an eager search of the checked graph (Dijkstra, or the widest path then ShortestAmongWidest;
+// the tests hold it against one), with far fewer checks: once a node is
 // settled, no other edge into it is checked. `exact(e)` says whether `see(e)` is exact. An edge
 // also settles a node when its floor proves what the search needs: its bound (kSum), or a width
 // at least the node's (kBottleneck). `evaluate(edges, targets)` checks the edges so that `see` is
@@ -71,9 +64,18 @@ SearchResult FindBestPathLazy(const HGraph& graph, const Measure& measure, const
                               const std::vector<double>* length_to_go, int batch,
                               LazySearchStats* stats);
 
-// The best path over the checked valid edges (every one with a profile if the measure needs
-// clearance), with its quality and objective.
-SearchResult FindBestPath(const HGraph& graph, const MeasureSpec& spec);
+// The width of the widest start-goal path (the largest minimum edge value; NaN edges unusable),
+// or -1 if the goal cannot be reached.
+double WidestPathValue(const HGraph& graph, const SearchEdgeFn& edge);
+
+// The bottleneck measures' tie break, the rule of every search that maximises a width: among the
+// paths of width `width`, the shortest. `see` seen for that second search: an edge at least
+// `width` wide has its length as its value (proven so where its floor is), any other is unusable.
+SearchEdgeFn ShortestAmongWidest(SearchEdgeFn see, double width);
+
+// The start-goal path that `via_edge` (per node, the edge into it on the path, or -1) leads back
+// along from the goal, with `value` as its SearchResult::value.
+SearchResult TracePath(const HGraph& graph, const std::vector<int>& via_edge, double value);
 
 // Quality of a given edge sequence (every edge must be valid; clearance fields are filled only
 // if every edge has a profile).

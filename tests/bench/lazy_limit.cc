@@ -34,6 +34,7 @@
 #include "core/merge/merge.h"
 #include "core/motion/local_planner.h"
 #include "core/search/search.h"
+#include "tests/unit/search_oracle.h"
 
 namespace hgraph {
 namespace {
@@ -59,7 +60,7 @@ OracleCount Oracle(const HGraph& graph, bool reveal_all) {
   OracleCount count;
   for (;;) {
     ++count.rounds;
-    const SearchResult path = FindBestPath(graph, *measure, see);
+    const SearchResult path = testing::EagerBestPath(graph, *measure, see);
     HGRAPH_CHECK(path.found);
     bool clean = true;
     for (int e : path.edges) {

@@ -355,6 +355,33 @@ def error_negative_parameters(env):
 
 
 @case
+def errors_name_the_flag_that_set_the_field(env):
+    """Every flag that fills a request field is registered with it (client/cli/request_flags.h):
+    an error about the field names the flag too, in every subcommand that takes it."""
+    for field, flag, extra in (
+            ("options.radius", "--radius", ["--variant", "neighborhood", "--radius", "-2"]),
+            ("options.phi", "--phi", ["--variant", "knn", "--phi", "0"]),
+            ("options.gap_init", "--gap-init", ["--gap-init", "-1"]),
+            ("options.gap_extend", "--gap-extend", ["--gap-extend", "-1"]),
+            ("options.resolution", "--resolution", ["--resolution", "2"]),
+            ("options.endpoint_tolerance", "--endpoint-tolerance",
+             ["--endpoint-tolerance", "-1"]),
+            ("options.max_node_spacing", "--max-node-spacing", ["--max-node-spacing", "-1"]),
+            ("options.optimize_ms", "--optimize-ms", ["--optimize-ms", "-5"]),
+            ("options.optimize_restarts", "--restarts", ["--restarts", "-1"]),
+            ("options.threads", "--threads", ["--threads", "-1"]),
+            ("measure.k", "--k", ["--measure", "inverse-clearance", "--k", "-1"]),
+            ("measure.safety", "--safety", ["--measure", "safe-length", "--safety", "-1"])):
+        env.merge_bad("%s (%s)" % (field, flag), *extra)
+    proc = env.run("check", "--scene", env.scene, "--paths", env.paths, "--resolution", "-1")
+    env.expect_bad_input(proc, "options.resolution (--resolution)")
+    proc = env.run("plan", "--scene", str(circles_scene(env)), "--resolution", "-1")
+    env.expect_bad_input(proc, "resolution (--resolution)")
+    proc = env.run("plan", "--scene", str(circles_scene(env)), "--planner", "none")
+    env.expect_bad_input(proc, "planner (--planner)")
+
+
+@case
 def error_bad_flags(env):
     proc = env.run("merge", "--scene", env.scene)
     expect(proc.returncode == 2, "missing --paths should exit 2, got %d" % proc.returncode)

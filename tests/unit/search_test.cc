@@ -1,5 +1,6 @@
-// Search on small H-Graphs whose edge reports are set by hand, against exhaustive enumeration of
-// every simple start-goal path.
+// Search on small H-Graphs whose edge reports are set by hand: the eager reference search
+// (search_oracle.h) against exhaustive enumeration of every simple start-goal path, and the lazy
+// search against the reference.
 #include "core/search/search.h"
 
 #include <gtest/gtest.h>
@@ -9,9 +10,13 @@
 #include <random>
 
 #include "core/hgraph/hgraph.h"
+#include "tests/unit/search_oracle.h"
 
 namespace hgraph {
 namespace {
+
+using testing::EagerBest;
+using testing::EagerBestPath;
 
 Space Plane() { return Space::RealVector(Eigen::Vector2d(0, 0), Eigen::Vector2d(10, 10)); }
 
@@ -105,7 +110,7 @@ TEST_P(SearchPropertyTest, EveryMeasureFindsTheExhaustiveOptimum) {
       if (!any || Better(spec, q, best)) best = q;
       any = true;
     }
-    const SearchResult found = FindBestPath(graph, spec);
+    const EagerBest found = EagerBestPath(graph, spec);
     ASSERT_EQ(found.found, any) << MeasureTypeName(spec.type);
     if (!any) continue;
     EXPECT_EQ(found.nodes.front(), graph.start());
@@ -180,7 +185,7 @@ TEST_P(SearchPropertyTest, LazySearchWithFloorsFindsTheExhaustiveOptimum) {
     }
     const SearchResult lazy = FindBestPathLazy(graph, *measure, see, is_exact, evaluate,
                                                widest ? nullptr : &to_go, &to_go, 3, nullptr);
-    const SearchResult eager = FindBestPath(graph, spec);
+    const EagerBest eager = EagerBestPath(graph, spec);
     ASSERT_EQ(lazy.found, eager.found) << MeasureTypeName(spec.type);
     if (!eager.found) continue;
     const PathQuality q = EvaluateEdges(graph, lazy.edges, spec.k);
@@ -205,7 +210,7 @@ TEST(SearchTest, InvalidEdgesAreNeverUsed) {
   for (int e = 0; e < graph.num_edges(); ++e) SetReport(graph, space, e, {1, 1});
   graph.mutable_edge(shortcut).report.state = EdgeState::kInvalid;
   // The two input edges are collinear with the shortcut, so only validity can tell them apart.
-  const SearchResult r = FindBestPath(graph, MeasureSpec{});
+  const EagerBest r = EagerBestPath(graph, MeasureSpec{});
   ASSERT_TRUE(r.found);
   EXPECT_EQ(r.nodes.size(), 3u);
 }
@@ -217,12 +222,12 @@ TEST(SearchTest, ProfiledEdgesWithoutACertificateAreNeverUsed) {
   for (int e = 0; e < graph.num_edges(); ++e) SetReport(graph, space, e, {1, 1});
   graph.mutable_edge(shortcut).report.certified = false;  // valid at its samples only
   for (const MeasureType type : {MeasureType::kLength, MeasureType::kBottleneckClearance}) {
-    const SearchResult r = FindBestPath(graph, MeasureSpec{.type = type});
+    const EagerBest r = EagerBestPath(graph, MeasureSpec{.type = type});
     ASSERT_TRUE(r.found);
     EXPECT_EQ(r.nodes.size(), 3u);
   }
   graph.mutable_edge(graph.path_edges(0)[0]).report.certified = false;
-  EXPECT_FALSE(FindBestPath(graph, MeasureSpec{}).found);
+  EXPECT_FALSE(EagerBestPath(graph, MeasureSpec{}).found);
 }
 
 TEST(SearchTest, SafeLengthTakesTheLongerSaferRoute) {
@@ -235,22 +240,22 @@ TEST(SearchTest, SafeLengthTakesTheLongerSaferRoute) {
   SetReport(graph, space, graph.path_edges(0)[1], {0.5, 0.5});
   SetReport(graph, space, graph.path_edges(1)[0], {0.9, 0.8, 0.9});
   SetReport(graph, space, graph.path_edges(1)[1], {0.9, 0.9});
-  const SearchResult shortest = FindBestPath(graph, MeasureSpec{});
-  const SearchResult safe =
-      FindBestPath(graph, MeasureSpec{.type = MeasureType::kSafeLength, .safety = 0.3});
+  const EagerBest shortest = EagerBestPath(graph, MeasureSpec{});
+  const EagerBest safe =
+      EagerBestPath(graph, MeasureSpec{.type = MeasureType::kSafeLength, .safety = 0.3});
   ASSERT_TRUE(shortest.found && safe.found);
   EXPECT_EQ(graph.node(shortest.nodes[1]).path, 0);
   EXPECT_EQ(graph.node(safe.nodes[1]).path, 1);
   EXPECT_FALSE(
-      FindBestPath(graph, MeasureSpec{.type = MeasureType::kSafeLength, .safety = 1.0}).found);
+      EagerBestPath(graph, MeasureSpec{.type = MeasureType::kSafeLength, .safety = 1.0}).found);
 }
 
 TEST(SearchTest, InverseClearanceIntegratesTheProfile) {
   const Space space = Plane();
   HGraph graph(space, {InputPath{.waypoints = {P(0, 0), P(3, 4)}}}, 0);
   SetReport(graph, space, 0, {1.0, 0.5, 1.0});
-  const SearchResult r =
-      FindBestPath(graph, MeasureSpec{.type = MeasureType::kInverseClearance, .k = 1});
+  const EagerBest r =
+      EagerBestPath(graph, MeasureSpec{.type = MeasureType::kInverseClearance, .k = 1});
   ASSERT_TRUE(r.found);
   // Trapezoid over two halves of length 2.5: 2.5 * (1 + 2) / 2 * 2.
   EXPECT_NEAR(r.quality.inverse_clearance, 7.5, 1e-12);

@@ -1,0 +1,53 @@
+#include "core/merge/search_view.h"
+
+#include <limits>
+
+namespace hgraph {
+
+SearchView::SearchView(const HGraph& graph, const EdgeEvidence& evidence, const Measure& measure,
+                       LazyEdgeEvaluator evaluator)
+    : graph_(graph),
+      evidence_(evidence),
+      measure_(measure),
+      evaluator_(evaluator),
+      seen_(graph.num_edges()),
+      seen_now_(graph.num_edges(), 0) {}
+
+SearchEdgeFn SearchView::see() {
+  return [this](int e) {
+    if (!seen_now_[e]) {
+      seen_[e] = Look(e);
+      seen_now_[e] = 1;
+    }
+    return seen_[e];
+  };
+}
+
+void SearchView::Forget(const std::vector<int>& edges) {
+  for (int e : edges) seen_now_[e] = 0;
+}
+
+bool SearchView::Exact(int e) const {
+  const EdgeReport& report = graph_.edge(e).report;
+  return !report.usable() || (report.state == EdgeState::kValid &&
+                              (!measure_.needs_clearance() || report.has_clearance));
+}
+
+SearchEdge SearchView::Look(int e) {
+  const EdgeReport& report = graph_.edge(e).report;
+  const double length = evidence_.edge_length[e];
+  if (!report.usable()) {
+    return SearchEdge{.value = std::numeric_limits<double>::quiet_NaN(), .length = length};
+  }
+  if (Exact(e)) {
+    const double value = measure_.EdgeValue(report);
+    return SearchEdge{.value = value, .length = length, .floor = value, .checked = true};
+  }
+  const EdgeBoundInput input = evaluator_.BoundInput(e, measure_.uses_ceilings());
+  return SearchEdge{.value = measure_.EdgeBound(input),
+                    .length = length,
+                    .floor = measure_.EdgeFloor(input),
+                    .checked = report.state == EdgeState::kValid};
+}
+
+}  // namespace hgraph
