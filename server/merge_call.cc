@@ -154,10 +154,13 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
     // What a repeat of the request answers.
     out->set_hgraph(name);
     out->set_generation(stored->generation);
+    out->set_retention(v1::RETENTION_KEPT);
     stored->answer = *out;
-    const auto not_kept = [out] {
+    // The name stays empty for readers older than `retention`, which says why.
+    const auto not_kept = [out](v1::Retention why) {
       out->clear_hgraph();
       out->clear_generation();
+      out->set_retention(why);
     };
     // In the cache before the registry says kept: a GetHGraph in between sees the merge still
     // running, never a kept name with nothing behind it.
@@ -167,7 +170,7 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
       service_->sessions_.AbandonHGraph(name);
       spdlog::warn("MergePaths session={} H-Graph of {} bytes exceeds --cache-bytes; not kept",
                    session, bytes);
-      return not_kept();
+      return not_kept(v1::RETENTION_TOO_LARGE);
     }
     try {
       service_->sessions_.KeepHGraph(name);
@@ -180,7 +183,7 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
       spdlog::info("MergePaths session={} was deleted while the merge ran; H-Graph not kept",
                    session);
       service_->cache_.Erase(CacheKind::kHGraph, name);
-      return not_kept();
+      return not_kept(v1::RETENTION_SESSION_ENDED);
     }
   }
 

@@ -213,6 +213,62 @@ def test_waypoint_sources_say_with_presence_what_the_parallel_arrays_say(client)
             assert (source.input, source.edge, source.fraction) == (path, index, fraction)
 
 
+def test_a_result_says_whether_its_hgraph_was_kept(client):
+    merged = client.merge(input_paths())
+    assert merged.retention == service_pb2.RETENTION_KEPT and merged.kept
+    assert merged.hgraph and merged.generation == 1
+    channel, stub = raw(client)
+    metadata = [("x-hgraph-session", client.session)]
+    requery = stub.Requery(service_pb2.RequeryRequest(hgraph=merged.hgraph), timeout=30,
+                           metadata=metadata)
+    assert requery.retention == service_pb2.RETENTION_KEPT
+    assert requery.hgraph == merged.hgraph
+    extra = [[list(q.values) for q in p.waypoints] for p in input_paths().paths]
+    added = client.add_paths(merged.hgraph, extra)
+    assert added.retention == service_pb2.RETENTION_KEPT and added.hgraph == merged.hgraph
+    channel.close()
+
+
+def test_an_hgraph_larger_than_the_cache_is_not_kept_and_the_result_says_so():
+    s = Server("--cache-bytes", str(300_000))
+    try:
+        with s.client() as c:
+            c.create_session(c.upload_scene(DATA / "scene.json"))
+            big = c.merge(densified(30), variant="all-pairs", hgraph_id="too-big")
+            # The result stands; the H-Graph is not held, and the response says why instead of
+            # leaving only an empty name.
+            assert big.result.path.waypoints and big.result.quality.length > 0
+            assert big.retention == service_pb2.RETENTION_TOO_LARGE and not big.kept
+            assert big.hgraph == "" and big.generation == 0
+            assert list(c.get_session().hgraphs) == []
+            with pytest.raises(hgraph_client.HgraphError) as e:
+                c.get_hgraph(c.session + "/hgraphs/too-big")
+            assert e.value.reason == "HGRAPH_NOT_FOUND"
+            # A small merge on the same server is kept.
+            small = c.merge(input_paths(), optimize_ms=0)
+            assert small.kept and small.hgraph
+    finally:
+        assert s.stop() == 0, "".join(s.log)
+
+
+def test_an_hgraph_whose_session_ended_during_the_merge_is_not_kept(client):
+    request = service_pb2.MergePathsRequest(
+        session=client.session, paths=hgraph_client.make_paths(densified(40)),
+        options=merge_pb2.MergeOptions(variant=merge_pb2.VARIANT_ALL_PAIRS),
+        progress_interval_ms=10)
+    call = client.merge_stream(request, timeout=120)
+    events = iter(call)
+    for event in events:
+        if event.HasField("progress") and event.progress.phase == "check":
+            break
+    # Deleted while the merge checks its bridge candidates (seconds of work left).
+    client.delete_session()
+    last = list(events)[-1]
+    assert last.HasField("result") and last.result.path.waypoints
+    assert last.retention == service_pb2.RETENTION_SESSION_ENDED
+    assert last.hgraph == "" and last.generation == 0
+
+
 def test_the_example_runs_and_prints_no_input_it_does_not_know(server):
     import subprocess
     import sys

@@ -100,8 +100,8 @@ class Progress:
 @dataclasses.dataclass
 class MergeOutcome:
     result: merge_pb2.MergeResult
-    # "sessions/<id>/hgraphs/<hgraph id>": pass to Client.requery. Empty if the server could not
-    # keep it.
+    # "sessions/<id>/hgraphs/<hgraph id>": pass to Client.requery. Empty if the server did not
+    # keep it (`retention` says why).
     hgraph: str
     progress_events: int
     # False when the call stopped early (best_so_far and the deadline, or StopMerge) and `result`
@@ -110,6 +110,15 @@ class MergeOutcome:
     complete: bool = True
     # The H-Graph's generation (1 after a merge; AddPaths increments it); 0 when not kept.
     generation: int = 0
+    # service_pb2.RETENTION_*: KEPT, or why the H-Graph was not kept (TOO_LARGE for
+    # --cache-bytes, SESSION_ENDED when the session went away while the merge ran);
+    # UNSPECIFIED when the call stopped early (complete False) or the server predates it.
+    retention: int = service_pb2.RETENTION_UNSPECIFIED
+
+    @property
+    def kept(self) -> bool:
+        """Whether the server holds the H-Graph for requery, add_paths and get_hgraph."""
+        return self.retention == service_pb2.RETENTION_KEPT
 
 
 @dataclasses.dataclass
@@ -533,7 +542,8 @@ class Client:
                                              p.distance_queries, p.elapsed_ms, objective, path))
                 elif event.HasField("result"):
                     return MergeOutcome(event.result, event.hgraph, events,
-                                        generation=event.generation)
+                                        generation=event.generation,
+                                        retention=event.retention)
         except StopMerge:
             call.cancel()
             if best is None:
