@@ -427,6 +427,73 @@ def test_a_merge_without_an_hgraph_id_stops_with_its_client(client):
     assert list(client.get_session().hgraphs) == [merged.hgraph]
 
 
+# Metadata and sizes -----------------------------------------------------------------------------
+
+def dense_path(waypoints):
+    """Input 0 of the circles problem with its edges cut into equal pieces: the same motion in
+    about `waypoints` waypoints."""
+    w = [list(q.values) for q in input_paths().paths[0].waypoints]
+    n = max(1, waypoints // (len(w) - 1))
+    out = [[a[j] + (b[j] - a[j]) * i / n for j in range(len(a))]
+           for a, b in zip(w, w[1:]) for i in range(n)]
+    return out + [w[-1]]
+
+
+def test_every_rpc_states_its_metadata_and_response_size():
+    text = (PROTO / "service.proto").read_text()
+    service = text[text.index("service PathMerger {"):text.index("message FindMissingBlobsRequest")]
+    comment = []
+    rpcs = {}
+    for line in service.splitlines()[1:]:
+        line = line.strip()
+        if line.startswith("//"):
+            comment.append(line[2:].strip())
+        elif line.startswith("rpc "):
+            rpcs[line.split()[1].split("(")[0]] = " ".join(comment)
+            comment = []
+        elif not line:
+            comment = []
+    # Every method of the service, each with its own comment.
+    assert sorted(rpcs) == sorted(service_pb2.DESCRIPTOR.services_by_name["PathMerger"]
+                                  .methods_by_name)
+    for rpc, text in rpcs.items():
+        metadata = text[text.index("Metadata:"):] if "Metadata:" in text else ""
+        assert "authorization" in metadata, f"{rpc}: no 'Metadata:' naming authorization"
+        assert "Response:" in text, f"{rpc}: no 'Response:' stating its size"
+
+
+def test_a_response_over_4_mib_needs_the_64_mib_receive_limit():
+    # One input of 150,000 waypoints: nothing to bridge, so the merged path is the input itself
+    # and its result (waypoints and their sources) is larger than gRPC's default 4 MiB.
+    s = Server("--max-waypoints", "200000")
+    try:
+        with s.client() as c:
+            c.create_session(c.upload_scene(DATA / "scene.json"))
+            merged = c.merge([dense_path(150_000)], optimize_ms=0)
+            size = merged.result.ByteSize()
+            assert size > 4 << 20, size
+            assert len(merged.result.path.waypoints) > 130_000
+            metadata = [("x-hgraph-session", c.session)]
+            request = service_pb2.GetHGraphRequest(name=merged.hgraph)
+            # A raw stub with gRPC's default receive limit: the server answers, the client
+            # refuses the message.
+            channel = grpc.insecure_channel(s.target)
+            with pytest.raises(grpc.RpcError) as e:
+                service_pb2_grpc.PathMergerStub(channel).GetHGraph(request, timeout=60,
+                                                                   metadata=metadata)
+            assert e.value.code() == grpc.StatusCode.RESOURCE_EXHAUSTED, e.value
+            channel.close()
+            # The same call with the documented 64 MiB receives it whole.
+            channel = grpc.insecure_channel(
+                s.target, options=[("grpc.max_receive_message_length", 64 << 20)])
+            graph = service_pb2_grpc.PathMergerStub(channel).GetHGraph(request, timeout=60,
+                                                                       metadata=metadata)
+            assert graph.result == merged.result
+            channel.close()
+    finally:
+        assert s.stop() == 0, "".join(s.log)
+
+
 # Listing ----------------------------------------------------------------------------------------
 
 def test_list_sessions_pages(server):
