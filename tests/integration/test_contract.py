@@ -16,7 +16,7 @@ import grpc
 import pytest
 
 import hgraph_client
-from hgraph.v1 import merge_pb2, service_pb2, service_pb2_grpc
+from hgraph.v1 import merge_pb2, scene_pb2, service_pb2, service_pb2_grpc, space_pb2
 from test_service import DATA, Server, densified, input_paths
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
@@ -492,6 +492,68 @@ def test_a_response_over_4_mib_needs_the_64_mib_receive_limit():
             channel.close()
     finally:
         assert s.stop() == 0, "".join(s.log)
+
+
+# Planning ---------------------------------------------------------------------------------------
+
+def two_rooms_scene():
+    """A point robot in a box split by a wall: start and goal in different rooms, so that every
+    planning attempt fails, whatever its seed or time."""
+    scene = scene_pb2.Scene(name="two-rooms")
+    scene.space.components.add(type=space_pb2.Component.TYPE_RN, dimension=2, lower=[0, 0],
+                               upper=[10, 10])
+    wall = scene.obstacles.add(name="wall")
+    wall.shape.box.size.extend([0.5, 20, 1])
+    wall.pose.position.extend([5, 5, 0])
+    scene.robot.add(name="point").shape.sphere.radius = 0.1
+    scene.start.values.extend([2, 5])
+    scene.goal.values.extend([8, 5])
+    return scene
+
+
+def test_plan_paths_reports_each_failed_attempt(server):
+    with server.client() as c:
+        c.create_session(c.upload_scene(two_rooms_scene()))
+        planned = c.plan(count=3, planner="rrt-connect", time_per_path_s=0.05, seed=9)
+        assert list(planned) == []
+        assert [f.index for f in planned.failures] == [0, 1, 2]
+        for f in planned.failures:
+            assert f.failure.reason == service_pb2.PlanAttemptFailure.REASON_NO_SOLUTION
+            assert f.failure.planner == "rrtconnect"
+            assert f.failure.message.startswith("no path in 0.05 s (OMPL: "), f.failure.message
+            assert not f.failure.HasField("invalid_edge")
+        seeds = [f.failure.seed for f in planned.failures]
+        assert len(set(seeds)) == 3
+        # The same request draws the same seeds; another seed others.
+        again = c.plan(count=3, planner="rrtconnect", time_per_path_s=0.05, seed=9)
+        assert [f.failure.seed for f in again.failures] == seeds
+        other = c.plan(count=1, planner="rrtconnect", time_per_path_s=0.05, seed=10)
+        assert other.failures[0].failure.seed not in seeds
+        # Without report_failures the stream stays as older readers know it: paths only.
+        channel, stub = raw(server)
+        request = service_pb2.PlanPathsRequest(session=c.session, planner="rrtconnect", count=2,
+                                               time_per_path_s=0.05)
+        assert list(stub.PlanPaths(request, timeout=60,
+                                   metadata=[("x-hgraph-session", c.session)])) == []
+        request.report_failures = True
+        events = list(stub.PlanPaths(request, timeout=60,
+                                     metadata=[("x-hgraph-session", c.session)]))
+        assert [e.index for e in events] == [0, 1]
+        assert all(e.HasField("failure") and not e.HasField("path") for e in events)
+        channel.close()
+
+
+def test_plan_paths_that_find_every_path_report_no_failure(client):
+    request = service_pb2.PlanPathsRequest(session=client.session, planner="rrtconnect", count=2,
+                                           time_per_path_s=2.0, seed=7, report_failures=True)
+    request.start.values.extend([30, 62])
+    request.goal.values.extend([67, 35])
+    channel, stub = raw(client)
+    events = list(stub.PlanPaths(request, timeout=60,
+                                 metadata=[("x-hgraph-session", client.session)]))
+    assert sorted(e.index for e in events) == [0, 1]
+    assert all(e.HasField("path") and not e.HasField("failure") for e in events)
+    channel.close()
 
 
 # Listing ----------------------------------------------------------------------------------------

@@ -122,6 +122,24 @@ class MergeOutcome:
 
 
 @dataclasses.dataclass
+class PlanFailure:
+    # The attempt's index in the request's count, its planning time, and why it found no path
+    # (service_pb2.PlanAttemptFailure: reason, planner, seed, message, invalid_edge).
+    index: int
+    elapsed_ms: float
+    failure: service_pb2.PlanAttemptFailure
+
+
+class PlanOutcome(list):
+    """The paths PlanPaths found (path_pb2.Path, in index order), as a list; `failures` holds a
+    PlanFailure for each attempt that found none."""
+
+    def __init__(self, paths=()):
+        super().__init__(paths)
+        self.failures: list = []
+
+
+@dataclasses.dataclass
 class CheckOutcome:
     # One report per path, in request order: valid, invalid_edge, invalid_at, invalid_cause,
     # invalid_reason, certified, waypoints and quality (length, min/avg/inverse clearance).
@@ -628,21 +646,30 @@ class Client:
     def plan(self, *, count: int = 1, planner: str = "", time_per_path_s: float = 0,
              seed: int = 1, simplify: bool = False, session: Optional[str] = None,
              start: Optional[Sequence[float]] = None, goal: Optional[Sequence[float]] = None,
-             timeout: Optional[float] = None) -> list:
-        """Plans input paths with the server's OMPL planners; returns the Path messages."""
+             timeout: Optional[float] = None) -> "PlanOutcome":
+        """Plans input paths with the server's OMPL planners; returns the Path messages found
+        (a list), with the attempts that found none in its `failures`."""
         def call():
             request = service_pb2.PlanPathsRequest(
                 session=session or self.session or "", planner=planner, count=count,
-                time_per_path_s=time_per_path_s, seed=seed, simplify=simplify)
+                time_per_path_s=time_per_path_s, seed=seed, simplify=simplify,
+                report_failures=True)
             if start is not None:
                 request.start.values.extend(start)
             if goal is not None:
                 request.goal.values.extend(goal)
+            outcome = PlanOutcome()
             try:
-                return [event.path for event in self.stub.PlanPaths(
-                    request, timeout=timeout, metadata=self._metadata(request.session))]
+                for event in self.stub.PlanPaths(request, timeout=timeout,
+                                                 metadata=self._metadata(request.session)):
+                    if event.HasField("failure"):
+                        outcome.failures.append(PlanFailure(event.index, event.elapsed_ms,
+                                                            event.failure))
+                    else:
+                        outcome.append(event.path)
             except grpc.RpcError as e:
                 _raise(e)
+            return outcome
 
         return self._recovering(call, session)
 
