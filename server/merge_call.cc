@@ -1,7 +1,9 @@
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <cmath>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -42,6 +44,13 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
                              ? request->progress_interval_ms()
                              : service->options().progress_interval_ms;
     interval_ = std::chrono::milliseconds(interval);
+    try {
+      optimize_until_ = OptimizeUntil(*context, request->options());
+    } catch (const InputError& e) {
+      Complete(DetailedStatus(grpc::StatusCode::INVALID_ARGUMENT, e.what(), e.field(),
+                              "INVALID_ARGUMENT"));
+      return;
+    }
     Submit([this] { Merge(&final_); });
   }
 
@@ -78,6 +87,36 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
     if (final_pending_ || durable_registered_) return;
     durable_registered_ = service_->AddDurable(token_, &durable_id_);
     if (!durable_registered_) token_.Cancel();
+  }
+
+  // With options.optimize_to_deadline: when the post-optimization's budget ends, the call's
+  // deadline less the margin kept for the answer (MergeOptions.deadline_margin_ms).
+  static std::optional<Clock::time_point> OptimizeUntil(const grpc::CallbackServerContext& context,
+                                                        const v1::MergeOptions& options) {
+    if (options.has_deadline_margin_ms()) {
+      limits::RequireRange(options.deadline_margin_ms(), 0, limits::kMaxDeadlineMarginMs,
+                           "options.deadline_margin_ms");
+    }
+    if (!options.optimize_to_deadline()) return std::nullopt;
+    if (options.has_optimize_ms()) {
+      throw InputError("options.optimize_ms",
+                       "must be unset with options.optimize_to_deadline (the deadline sets the "
+                       "post-optimization's budget)");
+    }
+    const auto deadline = context.deadline();
+    if (deadline == std::chrono::system_clock::time_point::max()) {
+      throw InputError("options.optimize_to_deadline",
+                       "needs a deadline on the call (the post-optimization spends what is left "
+                       "of it)");
+    }
+    const double left_ms =
+        std::chrono::duration<double, std::milli>(deadline - std::chrono::system_clock::now())
+            .count();
+    const double margin_ms = options.has_deadline_margin_ms()
+                                 ? options.deadline_margin_ms()
+                                 : std::max(limits::kMinDefaultDeadlineMarginMs, left_ms / 10);
+    return Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                              std::chrono::duration<double, std::milli>(left_ms - margin_ms));
   }
 
   void Merge(v1::MergePathsResponse* out) {
@@ -135,7 +174,8 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
         LocalPlannerOptions{.resolution = resolution, .clearance_bound = scene.clearance_bound});
     WithRequestPaths(
         [&] { stored->session = std::make_unique<HybridizationSession>(*stored->planner, merge); });
-    const MergeResult result = stored->session->Query(merge.measure, merge.progress, token_);
+    const MergeResult result = stored->session->Query(merge.measure, merge.progress, token_,
+                                                      std::nullopt, optimize_until_);
     *out->mutable_result() = MergeResultToProto(result);
     EchoEvaluation(request.options(), out->mutable_result());
     service_->RecordMerge("MergePaths", out->result());
@@ -254,7 +294,8 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
   }
 
   const v1::MergePathsRequest* request_;
-  const bool durable_;  // has an hgraph_id: outlives its client
+  const bool durable_;                               // has an hgraph_id: outlives its client
+  std::optional<Clock::time_point> optimize_until_;  // options.optimize_to_deadline
   std::chrono::milliseconds interval_{100};
 
   std::mutex mutex_;

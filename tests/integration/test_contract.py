@@ -556,6 +556,48 @@ def test_plan_paths_that_find_every_path_report_no_failure(client):
     channel.close()
 
 
+# A merge that spends its deadline ---------------------------------------------------------------
+
+def test_a_merge_spends_what_is_left_of_its_deadline_and_still_answers(client):
+    # A small radius keeps the bridges from the post-optimization's new points few, so that its
+    # overlay grows slowly and the deadline ends it, not the growth limit (on the development
+    # machine that limit comes after about 1.5 s of rounds; this budget is about 0.5 s).
+    merged = client.merge(input_paths(), options=merge_pb2.MergeOptions(radius=1e-3),
+                          optimize_to_deadline=True, timeout=0.6)
+    result = merged.result
+    # A whole answer (not the best-so-far of a stream cut by the deadline), which says that the
+    # deadline stopped the post-optimization.
+    assert merged.complete and merged.kept
+    assert result.stats.optimize_stop == merge_pb2.OPTIMIZE_STOP_DEADLINE
+    assert result.stats.optimize_rounds > 0
+    assert result.objective <= result.hgraph_objective
+    assert len(result.inputs) == 2 and result.HasField("timing")
+    report = client.check([result.path]).paths[0]
+    assert report.valid and report.certified
+    # A margin larger than the time left leaves no post-optimization: the H-Graph's optimum
+    # answers, and the result says why nothing more was tried.
+    quick = client.merge(input_paths(), optimize_to_deadline=True, deadline_margin_ms=600000,
+                         timeout=30).result
+    assert quick.stats.optimize_stop == merge_pb2.OPTIMIZE_STOP_DEADLINE
+    assert quick.stats.optimize_rounds == 0
+    assert quick.objective == quick.hgraph_objective
+
+
+def test_a_merge_to_its_deadline_needs_a_deadline_and_no_optimize_ms(client):
+    with pytest.raises(hgraph_client.HgraphError) as e:
+        client.merge(input_paths(), optimize_to_deadline=True)
+    assert e.value.code == grpc.StatusCode.INVALID_ARGUMENT
+    assert e.value.field == "options.optimize_to_deadline"
+    assert "deadline" in e.value.message
+    with pytest.raises(hgraph_client.HgraphError) as e:
+        client.merge(input_paths(), optimize_to_deadline=True, optimize_ms=100, timeout=30)
+    assert e.value.code == grpc.StatusCode.INVALID_ARGUMENT
+    assert e.value.field == "options.optimize_ms"
+    # Without the option a margin changes nothing (the stated range still holds).
+    plain = client.merge(input_paths(), deadline_margin_ms=10, timeout=30).result
+    assert plain.stats.optimize_stop != merge_pb2.OPTIMIZE_STOP_DEADLINE
+
+
 # Listing ----------------------------------------------------------------------------------------
 
 def test_list_sessions_pages(server):

@@ -466,6 +466,7 @@ class Client:
               optimize_ms: Optional[float] = None, restarts: Optional[int] = None,
               partial_shortcuts: Optional[bool] = None,
               progress_paths: Optional[bool] = None, best_so_far: bool = False,
+              optimize_to_deadline: bool = False, deadline_margin_ms: Optional[float] = None,
               session: Optional[str] = None,
               on_progress: Optional[Callable[[Progress], None]] = None,
               progress_interval_ms: int = 0, seed: int = 0, hgraph_id: str = "",
@@ -492,6 +493,11 @@ class Client:
         on_progress callback may raise StopMerge to end the call at once: the merge then returns
         the best path streamed so far, or raises HgraphError(CANCELLED) if none came yet.
 
+        `optimize_to_deadline` spends what is left of `timeout` on the post-optimization and
+        still answers with a complete result before it (MergeOptions.optimize_to_deadline;
+        result.stats.optimize_stop says OPTIMIZE_STOP_DEADLINE when the time ran out), keeping
+        `deadline_margin_ms` back for the answer (unset: a tenth of the time, at least 50 ms).
+
         `hgraph_id` names the H-Graph ("sessions/<id>/hgraphs/<hgraph_id>"): a repeat of the same
         call returns the first merge's result, and the merge finishes (and is kept) even if
         this call ends first: get_hgraph(name) then returns its result."""
@@ -501,14 +507,16 @@ class Client:
             report_inputs=report_inputs, report_clearance=report_clearance,
             optimize_ms=optimize_ms, restarts=restarts,
             partial_shortcuts=partial_shortcuts, progress_paths=progress_paths,
-            best_so_far=best_so_far, session=session, on_progress=on_progress,
+            best_so_far=best_so_far, optimize_to_deadline=optimize_to_deadline,
+            deadline_margin_ms=deadline_margin_ms, session=session, on_progress=on_progress,
             progress_interval_ms=progress_interval_ms, seed=seed, hgraph_id=hgraph_id,
             timeout=timeout), session)
 
     def _merge(self, paths, *, measure, k, safety, variant, options, max_node_spacing,
                evaluation, report_inputs, report_clearance, optimize_ms, restarts,
-               partial_shortcuts, progress_paths, best_so_far, session, on_progress,
-               progress_interval_ms, seed, hgraph_id, timeout) -> MergeOutcome:
+               partial_shortcuts, progress_paths, best_so_far, optimize_to_deadline,
+               deadline_margin_ms, session, on_progress, progress_interval_ms, seed, hgraph_id,
+               timeout) -> MergeOutcome:
         opts = merge_pb2.MergeOptions()
         if options is not None:
             opts.CopyFrom(options)
@@ -532,6 +540,10 @@ class Client:
             opts.progress_paths = progress_paths
         if best_so_far:
             opts.progress_paths = True
+        if optimize_to_deadline:
+            opts.optimize_to_deadline = True
+        if deadline_margin_ms is not None:
+            opts.deadline_margin_ms = deadline_margin_ms
         request = service_pb2.MergePathsRequest(
             session=session or self.session or "", paths=make_paths(paths),
             measure=make_measure(measure, k, safety), options=opts, seed=seed,
