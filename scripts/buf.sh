@@ -2,7 +2,7 @@
 # Runs buf (the protobuf linter and breaking-change checker) on proto/, installing it from npm
 # (@bufbuild/buf) into BUF_PREFIX (default: build/tools) on first use. Usage:
 #   scripts/buf.sh lint
-#   scripts/buf.sh breaking --against '.git#tag=v0.1.0,subdir=proto'
+#   scripts/buf.sh breaking --against tests/contract/v0.1.0.txtpb
 # Exits 77 (ctest's skip code here) when npm is absent or the install fails.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)

@@ -1,7 +1,9 @@
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <cmath>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -42,6 +44,13 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
                              ? request->progress_interval_ms()
                              : service->options().progress_interval_ms;
     interval_ = std::chrono::milliseconds(interval);
+    try {
+      optimize_until_ = OptimizeUntil(*context, request->options());
+    } catch (const InputError& e) {
+      Complete(DetailedStatus(grpc::StatusCode::INVALID_ARGUMENT, e.what(), e.field(),
+                              "INVALID_ARGUMENT"));
+      return;
+    }
     Submit([this] { Merge(&final_); });
   }
 
@@ -78,6 +87,36 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
     if (final_pending_ || durable_registered_) return;
     durable_registered_ = service_->AddDurable(token_, &durable_id_);
     if (!durable_registered_) token_.Cancel();
+  }
+
+  // With options.optimize_to_deadline: when the post-optimization's budget ends, the call's
+  // deadline less the margin kept for the answer (MergeOptions.deadline_margin_ms).
+  static std::optional<Clock::time_point> OptimizeUntil(const grpc::CallbackServerContext& context,
+                                                        const v1::MergeOptions& options) {
+    if (options.has_deadline_margin_ms()) {
+      limits::RequireRange(options.deadline_margin_ms(), 0, limits::kMaxDeadlineMarginMs,
+                           "options.deadline_margin_ms");
+    }
+    if (!options.optimize_to_deadline()) return std::nullopt;
+    if (options.has_optimize_ms()) {
+      throw InputError("options.optimize_ms",
+                       "must be unset with options.optimize_to_deadline (the deadline sets the "
+                       "post-optimization's budget)");
+    }
+    const auto deadline = context.deadline();
+    if (deadline == std::chrono::system_clock::time_point::max()) {
+      throw InputError("options.optimize_to_deadline",
+                       "needs a deadline on the call (the post-optimization spends what is left "
+                       "of it)");
+    }
+    const double left_ms =
+        std::chrono::duration<double, std::milli>(deadline - std::chrono::system_clock::now())
+            .count();
+    const double margin_ms = options.has_deadline_margin_ms()
+                                 ? options.deadline_margin_ms()
+                                 : std::max(limits::kMinDefaultDeadlineMarginMs, left_ms / 10);
+    return Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                              std::chrono::duration<double, std::milli>(left_ms - margin_ms));
   }
 
   void Merge(v1::MergePathsResponse* out) {
@@ -135,7 +174,8 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
         LocalPlannerOptions{.resolution = resolution, .clearance_bound = scene.clearance_bound});
     WithRequestPaths(
         [&] { stored->session = std::make_unique<HybridizationSession>(*stored->planner, merge); });
-    const MergeResult result = stored->session->Query(merge.measure, merge.progress, token_);
+    const MergeResult result = stored->session->Query(merge.measure, merge.progress, token_,
+                                                      std::nullopt, optimize_until_);
     *out->mutable_result() = MergeResultToProto(result);
     EchoEvaluation(request.options(), out->mutable_result());
     service_->RecordMerge("MergePaths", out->result());
@@ -154,10 +194,13 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
     // What a repeat of the request answers.
     out->set_hgraph(name);
     out->set_generation(stored->generation);
+    out->set_retention(v1::RETENTION_KEPT);
     stored->answer = *out;
-    const auto not_kept = [out] {
+    // The name stays empty for readers older than `retention`, which says why.
+    const auto not_kept = [out](v1::Retention why) {
       out->clear_hgraph();
       out->clear_generation();
+      out->set_retention(why);
     };
     // In the cache before the registry says kept: a GetHGraph in between sees the merge still
     // running, never a kept name with nothing behind it.
@@ -167,7 +210,7 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
       service_->sessions_.AbandonHGraph(name);
       spdlog::warn("MergePaths session={} H-Graph of {} bytes exceeds --cache-bytes; not kept",
                    session, bytes);
-      return not_kept();
+      return not_kept(v1::RETENTION_TOO_LARGE);
     }
     try {
       service_->sessions_.KeepHGraph(name);
@@ -180,7 +223,7 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
       spdlog::info("MergePaths session={} was deleted while the merge ran; H-Graph not kept",
                    session);
       service_->cache_.Erase(CacheKind::kHGraph, name);
-      return not_kept();
+      return not_kept(v1::RETENTION_SESSION_ENDED);
     }
   }
 
@@ -251,7 +294,8 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
   }
 
   const v1::MergePathsRequest* request_;
-  const bool durable_;  // has an hgraph_id: outlives its client
+  const bool durable_;                               // has an hgraph_id: outlives its client
+  std::optional<Clock::time_point> optimize_until_;  // options.optimize_to_deadline
   std::chrono::milliseconds interval_{100};
 
   std::mutex mutex_;

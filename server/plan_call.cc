@@ -15,8 +15,8 @@
 namespace hgraph::server {
 
 #ifdef HGRAPH_HAVE_PLAN
-// PlanPaths: plans on a worker; each path found is queued and written in order, one write in
-// flight, then the status.
+// PlanPaths: plans on a worker; each path found (and, with report_failures, each attempt that
+// found none) is queued and written in order, one write in flight, then the status.
 class PathMergerService::PlanCall final : public grpc::ServerWriteReactor<v1::PlanPathsResponse>,
                                           public CallBase {
  public:
@@ -78,16 +78,51 @@ class PathMergerService::PlanCall final : public grpc::ServerWriteReactor<v1::Pl
       *event.mutable_path() = PathToProto(path);
       event.set_index(index);
       event.set_elapsed_ms(elapsed_ms);
-      {
-        std::lock_guard lock(mutex_);
-        queue_.push_back(std::move(event));
-      }
-      Pump(/*write_done=*/false);
+      Send(std::move(event));
     };
+    if (request.report_failures()) {
+      plan.on_failure = [this, planner = plan.planner](const PlanAttempt& attempt) {
+        v1::PlanPathsResponse event;
+        event.set_index(attempt.index);
+        event.set_elapsed_ms(attempt.elapsed_ms);
+        *event.mutable_failure() = FailureToProto(attempt, planner);
+        Send(std::move(event));
+      };
+    }
     LocalPlanner checker(scene.world,
                          LocalPlannerOptions{.resolution = plan.resolution,
                                              .clearance_bound = scene.clearance_bound});
     ::hgraph::PlanPaths(checker, plan);
+  }
+
+  static v1::PlanAttemptFailure FailureToProto(const PlanAttempt& attempt, PlannerType planner) {
+    v1::PlanAttemptFailure failure;
+    switch (attempt.failure) {
+      case PlanFailure::kNone: break;
+      case PlanFailure::kNoSolution:
+        failure.set_reason(v1::PlanAttemptFailure::REASON_NO_SOLUTION);
+        break;
+      case PlanFailure::kOtherEndpoints:
+        failure.set_reason(v1::PlanAttemptFailure::REASON_OTHER_ENDPOINTS);
+        break;
+      case PlanFailure::kInvalidEdge:
+        failure.set_reason(v1::PlanAttemptFailure::REASON_INVALID_EDGE);
+        failure.set_invalid_edge(attempt.invalid_edge);
+        break;
+    }
+    failure.set_planner(PlannerTypeName(planner));
+    failure.set_seed(attempt.seed);
+    failure.set_message(attempt.status);
+    return failure;
+  }
+
+  // Queues one event; events go out in the order they were queued.
+  void Send(v1::PlanPathsResponse event) {
+    {
+      std::lock_guard lock(mutex_);
+      queue_.push_back(std::move(event));
+    }
+    Pump(/*write_done=*/false);
   }
 
   void Complete(const grpc::Status& status) override {

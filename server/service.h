@@ -130,8 +130,9 @@ class PathMergerService final : public v1::PathMerger::CallbackService {
                                            const std::string& field = "hgraph");
   // Counts a stored H-Graph that a query or an addition grew at its size now
   // (ResourceCache::Resize), so that the cache's budget bounds what the stored H-Graphs hold.
-  // Returns whether the cache still holds it.
-  bool Reaccount(const std::string& name, StoredHGraph& stored);
+  // Returns whether the cache still holds it: KEPT, TOO_LARGE (grown past the whole budget,
+  // now dropped) or DROPPED (evicted or deleted before this call counted it).
+  v1::Retention Reaccount(const std::string& name, StoredHGraph& stored);
   void AddUpload(UploadCall* call);
   void RemoveUpload(UploadCall* call);
   void RecordMerge(const std::string& method, const v1::MergeResult& result);

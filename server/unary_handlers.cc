@@ -157,16 +157,20 @@ std::shared_ptr<PathMergerService::StoredHGraph> PathMergerService::HeldHGraph(
   return stored;
 }
 
-bool PathMergerService::Reaccount(const std::string& name, StoredHGraph& stored) {
+v1::Retention PathMergerService::Reaccount(const std::string& name, StoredHGraph& stored) {
   size_t bytes = 0;
   {
     std::lock_guard lock(stored.mutex);
     bytes = stored.session->memory_bytes();
   }
-  if (cache_.Resize(CacheKind::kHGraph, name, bytes)) return true;
-  spdlog::warn("{} no longer held: {} bytes after the query (--cache-bytes)", ClientText(name),
-               bytes);
-  return false;
+  if (cache_.Resize(CacheKind::kHGraph, name, bytes)) return v1::RETENTION_KEPT;
+  if (bytes > cache_.budget_bytes()) {
+    spdlog::warn("{} no longer held: {} bytes after the query (--cache-bytes)", ClientText(name),
+                 bytes);
+    return v1::RETENTION_TOO_LARGE;
+  }
+  spdlog::info("{} was evicted or deleted while a query ran on it", ClientText(name));
+  return v1::RETENTION_DROPPED;
 }
 
 grpc::ServerUnaryReactor* PathMergerService::Requery(grpc::CallbackServerContext* context,
@@ -185,7 +189,10 @@ grpc::ServerUnaryReactor* PathMergerService::Requery(grpc::CallbackServerContext
           std::lock_guard lock(stored->mutex);
           response->set_generation(stored->generation);
         }
-        if (Reaccount(request->hgraph(), *stored)) response->set_hgraph(request->hgraph());
+        response->set_retention(Reaccount(request->hgraph(), *stored));
+        if (response->retention() == v1::RETENTION_KEPT) {
+          response->set_hgraph(request->hgraph());
+        }
         RecordMerge("Requery", response->result());
       },
       /*on_worker=*/true);
@@ -255,7 +262,10 @@ grpc::ServerUnaryReactor* PathMergerService::AddPaths(grpc::CallbackServerContex
         }
         *response->mutable_result() = MergeResultToProto(result);
         EchoEvaluation(stored->options, response->mutable_result());
-        if (Reaccount(request->hgraph(), *stored)) response->set_hgraph(request->hgraph());
+        response->set_retention(Reaccount(request->hgraph(), *stored));
+        if (response->retention() == v1::RETENTION_KEPT) {
+          response->set_hgraph(request->hgraph());
+        }
         response->set_candidates_added(added);
         response->set_generation(generation);
         RecordMerge("AddPaths", response->result());

@@ -83,6 +83,8 @@ v1::MergePathsRequest BuildRequest(const MergeFlags& f, const v1::Scene& scene,
 struct MergeRun {
   v1::MergeResult result;
   std::string hgraph;  // with --server: the stored H-Graph's name, for `hgraph requery`
+  // With --server: whether the server kept the H-Graph, or why not.
+  v1::Retention retention = v1::RETENTION_UNSPECIFIED;
   // False: the deadline passed (--best-so-far) and `result` holds the best path streamed before
   // it, with its objective and measure only.
   bool complete = true;
@@ -152,6 +154,11 @@ int RunMerge(const MergeFlags& f, const MergeRunner& run, std::optional<LoadedSc
   }
   PrintMergeTable(result);
   if (!response.hgraph.empty()) std::printf("hgraph %s\n", response.hgraph.c_str());
+  if (response.retention == v1::RETENTION_TOO_LARGE) {
+    std::printf("hgraph not kept: larger than the server's --cache-bytes\n");
+  } else if (response.retention == v1::RETENTION_SESSION_ENDED) {
+    std::printf("hgraph not kept: the session ended while the merge ran\n");
+  }
   return kExitOk;
 }
 
@@ -213,7 +220,9 @@ int RunRemote(const MergeFlags& f, const RemoteOptions& remote) {
     };
     try {
       v1::MergePathsResponse response = client.Merge(r, on_progress);
-      return MergeRun{.result = std::move(*response.mutable_result()), .hgraph = response.hgraph()};
+      return MergeRun{.result = std::move(*response.mutable_result()),
+                      .hgraph = response.hgraph(),
+                      .retention = response.retention()};
     } catch (const Error& e) {
       if (!f.best_so_far || !best || e.code() != ErrorCode::kDeadlineExceeded) throw;
       return MergeRun{.result = std::move(*best), .complete = false};

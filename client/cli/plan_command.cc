@@ -155,7 +155,16 @@ int RunRemote(const PlanFlags& f, const RemoteOptions& remote) {
   std::vector<PlanAttempt> attempts(request.count());
   for (int i = 0; i < request.count(); ++i) attempts[i].index = i;
   std::vector<InputPath> paths;
+  request.set_report_failures(true);
   client.Plan(request, [&](const v1::PlanPathsResponse& event) {
+    if (event.has_failure()) {
+      // The server's word on a run that found nothing, as a local run prints OMPL's.
+      std::fprintf(stderr, "run %d: %s\n", event.index(), event.failure().message().c_str());
+      if (event.index() >= 0 && event.index() < request.count()) {
+        attempts[event.index()].elapsed_ms = event.elapsed_ms();
+      }
+      return;
+    }
     v1::PathSet one;
     *one.add_paths() = event.path();
     paths.push_back(PathsFromProto(one).front());

@@ -81,6 +81,7 @@ v1::OptimizeStop OptimizeStopToProto(OptimizeStop stop) {
     case OptimizeStop::kRounds: return v1::OPTIMIZE_STOP_ROUNDS;
     case OptimizeStop::kTime: return v1::OPTIMIZE_STOP_TIME;
     case OptimizeStop::kGrowth: return v1::OPTIMIZE_STOP_GROWTH;
+    case OptimizeStop::kDeadline: return v1::OPTIMIZE_STOP_DEADLINE;
   }
   return v1::OPTIMIZE_STOP_UNSPECIFIED;
 }
@@ -93,6 +94,7 @@ OptimizeStop OptimizeStopFromProto(v1::OptimizeStop stop) {
     case v1::OPTIMIZE_STOP_ROUNDS: return OptimizeStop::kRounds;
     case v1::OPTIMIZE_STOP_TIME: return OptimizeStop::kTime;
     case v1::OPTIMIZE_STOP_GROWTH: return OptimizeStop::kGrowth;
+    case v1::OPTIMIZE_STOP_DEADLINE: return OptimizeStop::kDeadline;
     default: return OptimizeStop::kOff;
   }
 }

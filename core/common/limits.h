@@ -34,6 +34,11 @@ inline constexpr int kMaxProgressIntervalMs = 3600 * 1000;
 inline constexpr double kMaxPlanSeconds = 3600;
 // The anytime post-optimization's time budget.
 inline constexpr double kMaxOptimizeMs = 3600e3;
+// The time a merge that spends its deadline on the post-optimization keeps back for its answer
+// (MergeOptions.deadline_margin_ms), and the margin it keeps without one: a tenth of the time
+// left, at least this.
+inline constexpr double kMaxDeadlineMarginMs = 600e3;
+inline constexpr double kMinDefaultDeadlineMarginMs = 50;
 // Its restarts from the input paths (each about one post-optimization).
 inline constexpr int kMaxOptimizeRestarts = 100000;
 // What the post-optimization may add to an H-Graph (its shortcuts' points, and bridges from each

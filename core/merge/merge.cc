@@ -65,6 +65,7 @@ const char* OptimizeStopName(OptimizeStop stop) {
     case OptimizeStop::kRounds: return "rounds";
     case OptimizeStop::kTime: return "time";
     case OptimizeStop::kGrowth: return "growth";
+    case OptimizeStop::kDeadline: return "deadline";
   }
   return "off";
 }
@@ -383,7 +384,8 @@ void HybridizationSession::ProfileWhatIsKnown(bool needs_clearance,
 
 MergeResult HybridizationSession::Query(const MeasureSpec& spec, const ProgressCallback& progress,
                                         const CancelToken& cancel,
-                                        std::optional<bool> report_clearance) {
+                                        std::optional<bool> report_clearance,
+                                        std::optional<Clock::time_point> optimize_until) {
   const std::unique_ptr<const Measure> measure = Measure::Make(spec);
   const bool needs_clearance = measure->needs_clearance();
   const bool profile_result = report_clearance.value_or(options_.report_clearance);
@@ -429,8 +431,8 @@ MergeResult HybridizationSession::Query(const MeasureSpec& spec, const ProgressC
                  progress, cancel, &result, &rechecked);
   result.hgraph_objective = measure->Objective(EvaluateEdges(graph_, best.edges, spec.k));
   if (PostOptimizer::Applies(options_, *measure)) {
-    best =
-        PostOptimizer(*this, *measure, progress, cancel, &result, &rechecked).Run(std::move(best));
+    best = PostOptimizer(*this, *measure, progress, cancel, &result, &rechecked, optimize_until)
+               .Run(std::move(best));
   }
   if (!needs_clearance && profile_result) {
     best = SearchBest(*measure, EdgeProof::kProfile, progress, cancel, &result, &rechecked);

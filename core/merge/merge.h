@@ -4,6 +4,7 @@
 // hgraph.v1 (merge.proto).
 #pragma once
 
+#include <chrono>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -83,8 +84,9 @@ enum class OptimizeStop {
   kRounds,     // the automatic budget's rounds ran out
   kTime,       // the client's optimize_ms ran out
   kGrowth,     // the overlay reached limits::kMaxOptimizeNodes or kMaxOptimizeEdges
+  kDeadline,   // the query's optimize_until came (the caller's deadline, less a margin)
 };
-// "off", "converged", "rounds", "time", "growth".
+// "off", "converged", "rounds", "time", "growth", "deadline".
 const char* OptimizeStopName(OptimizeStop stop);
 
 struct MergeStats {
@@ -153,11 +155,15 @@ class HybridizationSession {
 
   // Searches under `measure`, computing clearance profiles only for valid edges that lack one.
   // `report_clearance` overrides MergeOptions::report_clearance for this query only (a requery
-  // under length that wants its path's clearance). Throws InputError for a bad measure and
-  // Error(kFailedPrecondition) if no path satisfies it.
-  MergeResult Query(const MeasureSpec& measure, const ProgressCallback& progress = {},
-                    const CancelToken& cancel = {},
-                    std::optional<bool> report_clearance = std::nullopt);
+  // under length that wants its path's clearance). `optimize_until` gives this query's
+  // post-optimization a budget that ends then (the time left when it starts; none if that has
+  // passed), spent as an explicit optimize_ms is, restarts included; with optimize_ms > 0 too
+  // the shorter budget holds. Throws InputError for a bad measure and Error(kFailedPrecondition)
+  // if no path satisfies it.
+  MergeResult Query(
+      const MeasureSpec& measure, const ProgressCallback& progress = {},
+      const CancelToken& cancel = {}, std::optional<bool> report_clearance = std::nullopt,
+      std::optional<std::chrono::steady_clock::time_point> optimize_until = std::nullopt);
 
   // Adds input paths to the H-Graph (AddPaths): their nodes (subdivided as the first inputs),
   // their edges, and bridge candidates from every new node to every node added before it (its own

@@ -39,21 +39,32 @@ bool PostOptimizer::Applies(const MergeOptions& options, const Measure& measure)
 
 PostOptimizer::PostOptimizer(HybridizationSession& session, const Measure& measure,
                              const ProgressCallback& progress, const CancelToken& cancel,
-                             MergeResult* result, int64_t* rechecked)
+                             MergeResult* result, int64_t* rechecked,
+                             std::optional<Clock::time_point> until)
     : session_(session),
       graph_(session.graph_),
       measure_(measure),
       progress_(progress),
       cancel_(cancel),
       result_(result),
-      rechecked_(rechecked) {}
+      rechecked_(rechecked),
+      until_(until) {}
 
 SearchResult PostOptimizer::Run(SearchResult best) {
   const MergeOptions& options = session_.options_;
   started_ = Clock::now();
+  if (options.optimize_ms > 0) budget_ms_ = options.optimize_ms;
+  if (until_) {
+    const double left =
+        std::max(0.0, std::chrono::duration<double, std::milli>(*until_ - started_).count());
+    if (budget_ms_ < 0 || left < budget_ms_) {
+      budget_ms_ = left;
+      budget_stop_ = OptimizeStop::kDeadline;
+    }
+  }
   // The clock stops the rounds only when the client gave a budget in time; the automatic budget
   // counts rounds, so that the answer is the same on any machine and under any load.
-  max_rounds_ = options.optimize_ms > 0
+  max_rounds_ = budget_ms_ >= 0
                     ? std::numeric_limits<int>::max()
                     : kAutomaticOptimizeRounds * (1 + std::max(0, options.optimize_restarts));
   nodes_before_ = graph_.num_nodes();
@@ -75,9 +86,8 @@ bool PostOptimizer::GoOn() {
   if (graph_.num_nodes() - nodes_before_ >= limits::kMaxOptimizeNodes ||
       graph_.num_edges() - edges_before_ >= limits::kMaxOptimizeEdges) {
     stop = OptimizeStop::kGrowth;
-  } else if (session_.options_.optimize_ms > 0 &&
-             MsSince(started_) >= session_.options_.optimize_ms) {
-    stop = OptimizeStop::kTime;
+  } else if (budget_ms_ >= 0 && MsSince(started_) >= budget_ms_) {
+    stop = budget_stop_;
   } else if (round_ >= max_rounds_) {
     stop = OptimizeStop::kRounds;
   } else {
@@ -236,7 +246,7 @@ void PostOptimizer::Restart() {
   std::stable_sort(order.begin(), order.end(),
                    [&](int a, int b) { return input_length[a] < input_length[b]; });
   for (int restart = 0; !order.empty() && GoOn() &&
-                        (by_budget ? options.optimize_ms > 0 : restart < options.optimize_restarts);
+                        (by_budget ? budget_ms_ > 0 : restart < options.optimize_restarts);
        ++restart) {
     std::vector<int> ids;
     for (int n : graph_.path_nodes(order[restart % order.size()])) {

@@ -7,6 +7,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "core/merge/merge.h"
@@ -19,9 +20,10 @@ int ResolveThreads(int threads);
 // One post-optimization of one query. Not copyable; lives for one Run.
 class PostOptimizer {
  public:
+  // `until`: HybridizationSession::Query's optimize_until.
   PostOptimizer(HybridizationSession& session, const Measure& measure,
                 const ProgressCallback& progress, const CancelToken& cancel, MergeResult* result,
-                int64_t* rechecked);
+                int64_t* rechecked, std::optional<std::chrono::steady_clock::time_point> until);
   PostOptimizer(const PostOptimizer&) = delete;
   PostOptimizer& operator=(const PostOptimizer&) = delete;
 
@@ -71,7 +73,12 @@ class PostOptimizer {
   const CancelToken& cancel_;
   MergeResult* result_;
   int64_t* rechecked_;
+  std::optional<Clock::time_point> until_;
   Clock::time_point started_;
+  // The budget in time (< 0: the automatic one, in rounds), and what its end is called: kTime
+  // for optimize_ms, kDeadline for `until`.
+  double budget_ms_ = -1;
+  OptimizeStop budget_stop_ = OptimizeStop::kTime;
   int nodes_before_ = 0;
   int edges_before_ = 0;
   int max_rounds_ = 0;

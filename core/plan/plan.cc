@@ -102,6 +102,109 @@ PlannerType ParsePlannerType(const std::string& name, const std::string& field) 
                               "' (known: prm, prm-cycles, prmstar, rrt, rrtconnect, lazyprm)");
 }
 
+namespace {
+
+// One attempt's OMPL objects. Everything in it that draws a seed from OMPL's generator is made
+// under the lock (LockOmplRandomness); the search runs without it.
+struct AttemptProblem {
+  ob::ProblemDefinitionPtr pdef;
+  ob::PlannerPtr planner;
+};
+
+AttemptProblem MakeAttemptProblem(const MotionChecker& checker, const PlanRequest& request,
+                                  const Config& start, const Config& goal, uint64_t seed) {
+  const Space& space = checker.space();
+  auto lock = LockOmplRandomness();
+  SeedOmpl(seed);
+  const ob::SpaceInformationPtr si = MakeSpaceInformation(checker, request.resolution);
+  // PRM asks for two samplers (a valid-state sampler over a plain one, and a plain one), the
+  // others for one.
+  PrepareSamplers(si, 2);
+  AttemptProblem problem{.pdef = std::make_shared<ob::ProblemDefinition>(si)};
+  ob::ScopedState<> s(si), g(si);
+  ToOmpl(space, start, s.get());
+  ToOmpl(space, goal, g.get());
+  // A tolerance of 0 would make RRT's goal test depend on rounding; the path's last state is
+  // replaced by the exact goal afterwards.
+  problem.pdef->setStartAndGoalStates(s, g, 1e-9);
+  if (request.planner == PlannerType::kPRMCycles) {
+    // An objective whose threshold (0) is never met: PRM keeps improving until the time is up
+    // instead of returning its first solution.
+    problem.pdef->setOptimizationObjective(
+        std::make_shared<ob::PathLengthOptimizationObjective>(si));
+  }
+  problem.planner = MakePlanner(request.planner, si);
+  problem.planner->setProblemDefinition(problem.pdef);
+  problem.planner->setup();
+  return problem;
+}
+
+// Runs the planner until it stops (a solution, the time budget, or the request's cancel) and
+// records its time and OMPL's status in `attempt`.
+void Solve(const AttemptProblem& problem, const PlanRequest& request, PlanAttempt* attempt) {
+  const CancelToken cancel = request.cancel;
+  const ob::PlannerTerminationCondition ptc = ob::plannerOrTerminationCondition(
+      ob::timedPlannerTerminationCondition(request.time_s),
+      ob::PlannerTerminationCondition([cancel] { return cancel.stopped(); }));
+  const auto t0 = std::chrono::steady_clock::now();
+  const ob::PlannerStatus status = problem.planner->solve(ptc);
+  attempt->elapsed_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  attempt->status = status.asString();
+}
+
+// Marks `attempt` failed for `failure`, with `status` as the text that says why.
+InputPath Fail(PlanAttempt* attempt, PlanFailure failure, std::string status) {
+  attempt->failure = failure;
+  attempt->status = std::move(status);
+  return {};
+}
+
+// The attempt's solution as an input path named `name` with the request's exact endpoints,
+// shortcut if asked, every edge passing our checker; or an empty path with the attempt's
+// failure set.
+InputPath AcceptSolution(const MotionChecker& checker, const PlanRequest& request,
+                         const Config& start, const Config& goal, const ob::ProblemDefinition& pdef,
+                         const std::string& name, PlanAttempt* attempt) {
+  const Space& space = checker.space();
+  if (!pdef.hasExactSolution()) {
+    return Fail(attempt, PlanFailure::kNoSolution,
+                "no path in " + FormatSeconds(request.time_s) + " (OMPL: " + attempt->status + ")");
+  }
+  InputPath path = FromOmplPath(space, *pdef.getSolutionPath()->as<og::PathGeometric>(), name);
+  if (request.simplify) {
+    // Takes the lock itself, for as long as it draws seeds.
+    path = ShortcutPath(checker, path,
+                        {.seed = request.seed + static_cast<uint64_t>(attempt->index),
+                         .resolution = request.resolution});
+  }
+  if (path.waypoints.empty()) {
+    return Fail(attempt, PlanFailure::kNoSolution, "the planner returned an empty path");
+  }
+  // Exact endpoints: every input of a merge must share them bit for bit.
+  if (space.Distance(path.waypoints.front(), start) > kEndpointTolerance ||
+      space.Distance(path.waypoints.back(), goal) > kEndpointTolerance) {
+    return Fail(attempt, PlanFailure::kOtherEndpoints,
+                "planner returned a path with other endpoints");
+  }
+  path.waypoints.front() = start;
+  path.waypoints.back() = goal;
+  if (path.waypoints.size() == 1) path.waypoints.push_back(goal);
+  const int bad = FirstInvalidEdge(checker, path);
+  if (bad >= 0) {
+    attempt->invalid_edge = bad;
+    return Fail(attempt, PlanFailure::kInvalidEdge,
+                "rejected: edge " + std::to_string(bad) + " is invalid under our checker");
+  }
+  return path;
+}
+
+}  // namespace
+
+uint64_t PlanAttemptSeed(uint64_t seed, int index) {
+  return seed * 0x100000001b3ULL + static_cast<uint64_t>(index);
+}
+
 PlanResult PlanPaths(const MotionChecker& checker, const PlanRequest& request) {
   const Space& space = checker.space();
   if (request.count < 1) {
@@ -120,81 +223,16 @@ PlanResult PlanPaths(const MotionChecker& checker, const PlanRequest& request) {
   PlanResult result;
   for (int index = 0; index < request.count; ++index) {
     request.cancel.ThrowIfStopped();
-    PlanAttempt attempt{.index = index};
+    PlanAttempt attempt{.index = index, .seed = PlanAttemptSeed(request.seed, index)};
+    const AttemptProblem problem = MakeAttemptProblem(checker, request, start, goal, attempt.seed);
+    Solve(problem, request, &attempt);
+    request.cancel.ThrowIfStopped();
     const std::string name =
         std::string(PlannerTypeName(request.planner)) + "-" + std::to_string(index);
-    InputPath path;
-    ob::SpaceInformationPtr si;
-    ob::ProblemDefinitionPtr pdef;
-    ob::PlannerPtr planner;
-    {
-      // Everything that draws a seed from OMPL's generator is made here, under the lock; the
-      // search below runs without it (LockOmplRandomness).
-      auto lock = LockOmplRandomness();
-      SeedOmpl(request.seed * 0x100000001b3ULL + static_cast<uint64_t>(index));
-      si = MakeSpaceInformation(checker, request.resolution);
-      // PRM asks for two samplers (a valid-state sampler over a plain one, and a plain one),
-      // the others for one.
-      PrepareSamplers(si, 2);
-      pdef = std::make_shared<ob::ProblemDefinition>(si);
-      ob::ScopedState<> s(si), g(si);
-      ToOmpl(space, start, s.get());
-      ToOmpl(space, goal, g.get());
-      // A tolerance of 0 would make RRT's goal test depend on rounding; the path's last state
-      // is replaced by the exact goal below.
-      pdef->setStartAndGoalStates(s, g, 1e-9);
-      if (request.planner == PlannerType::kPRMCycles) {
-        // An objective whose threshold (0) is never met: PRM keeps improving until the time is
-        // up instead of returning its first solution.
-        pdef->setOptimizationObjective(std::make_shared<ob::PathLengthOptimizationObjective>(si));
-      }
-      planner = MakePlanner(request.planner, si);
-      planner->setProblemDefinition(pdef);
-      planner->setup();
-    }
-    const CancelToken cancel = request.cancel;
-    const ob::PlannerTerminationCondition ptc = ob::plannerOrTerminationCondition(
-        ob::timedPlannerTerminationCondition(request.time_s),
-        ob::PlannerTerminationCondition([cancel] { return cancel.stopped(); }));
-    const auto t0 = std::chrono::steady_clock::now();
-    const ob::PlannerStatus status = planner->solve(ptc);
-    attempt.elapsed_ms =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    attempt.status = status.asString();
-    request.cancel.ThrowIfStopped();
-
-    if (pdef->hasExactSolution()) {
-      const auto* solution = pdef->getSolutionPath()->as<og::PathGeometric>();
-      path = FromOmplPath(space, *solution, name);
-      if (request.simplify) {
-        // Takes the lock itself, for as long as it draws seeds.
-        path = ShortcutPath(checker, path,
-                            {.seed = request.seed + static_cast<uint64_t>(index),
-                             .resolution = request.resolution});
-      }
+    InputPath path = AcceptSolution(checker, request, start, goal, *problem.pdef, name, &attempt);
+    if (path.waypoints.empty()) {
+      if (request.on_failure) request.on_failure(attempt);
     } else {
-      attempt.status =
-          "no path in " + FormatSeconds(request.time_s) + " (OMPL: " + attempt.status + ")";
-    }
-    if (!path.waypoints.empty()) {
-      // Exact endpoints: every input of a merge must share them bit for bit.
-      if (space.Distance(path.waypoints.front(), start) > kEndpointTolerance ||
-          space.Distance(path.waypoints.back(), goal) > kEndpointTolerance) {
-        attempt.status = "planner returned a path with other endpoints";
-        path.waypoints.clear();
-      } else {
-        path.waypoints.front() = start;
-        path.waypoints.back() = goal;
-        if (path.waypoints.size() == 1) path.waypoints.push_back(goal);
-        const int bad = FirstInvalidEdge(checker, path);
-        if (bad >= 0) {
-          attempt.status =
-              "rejected: edge " + std::to_string(bad) + " is invalid under our checker";
-          path.waypoints.clear();
-        }
-      }
-    }
-    if (!path.waypoints.empty()) {
       attempt.found = true;
       attempt.waypoints = static_cast<int>(path.waypoints.size());
       attempt.length = PathLength(space, path);

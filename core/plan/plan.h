@@ -47,6 +47,18 @@ PlannerType ParsePlannerType(const std::string& name, const std::string& field);
 // Called once per path found, from the calling thread, before the next path is planned.
 using PathCallback = std::function<void(int index, const InputPath& path, double elapsed_ms)>;
 
+// Why an attempt returned no path.
+enum class PlanFailure {
+  kNone,            // it found one
+  kNoSolution,      // OMPL found no exact solution within the time budget (PlanAttempt.status)
+  kOtherEndpoints,  // OMPL's path did not start at the start or end at the goal
+  kInvalidEdge,     // an edge of OMPL's path fails our checker (PlanAttempt.invalid_edge)
+};
+
+struct PlanAttempt;
+// Called once per attempt that found no path, from the calling thread, before the next one.
+using FailureCallback = std::function<void(const PlanAttempt& attempt)>;
+
 struct PlanRequest {
   PlannerType planner = PlannerType::kPRM;
   Config start;
@@ -59,19 +71,24 @@ struct PlanRequest {
   // Longest motion OMPL checks in one step, as a fraction of the space's extent: pass the local
   // planner's resolution, so that OMPL's own discretisation matches ours.
   double resolution = kDefaultResolution;
-  PathCallback on_path;  // may be empty
-  CancelToken cancel;    // stops the current run and throws Error(kCancelled/kDeadlineExceeded)
+  PathCallback on_path;        // may be empty
+  FailureCallback on_failure;  // may be empty
+  CancelToken cancel;  // stops the current run and throws Error(kCancelled/kDeadlineExceeded)
 };
 
 // What happened to one requested path.
 struct PlanAttempt {
   int index = 0;
+  // The seed OMPL's generator got for this attempt: PlanAttemptSeed(request.seed, index).
+  uint64_t seed = 0;
   bool found = false;
   double elapsed_ms = 0;
   // OMPL's planner status ("Exact solution", "Timeout", ...) or why the path was rejected.
   std::string status;
   int waypoints = 0;
   double length = 0;
+  PlanFailure failure = PlanFailure::kNone;
+  int invalid_edge = -1;  // with kInvalidEdge: the first edge our checker rejects
 };
 
 struct PlanResult {
@@ -81,11 +98,14 @@ struct PlanResult {
   std::vector<PlanAttempt> attempts;  // one per requested path
 };
 
-// Plans request.count paths. A run that finds nothing in time is reported in `attempts` (it is
-// not an error). Throws InputError for a bad request (count < 1, time_s <= 0, start or goal of
-// the wrong dimension, out of bounds or in collision) and Error(kCancelled/kDeadlineExceeded)
-// when request.cancel stops it. Thread safe, but runs one OMPL planner at a time per process
-// (see "Determinism").
+// The seed of attempt `index` of a request with `seed` (each attempt draws its own).
+uint64_t PlanAttemptSeed(uint64_t seed, int index);
+
+// Plans request.count paths. A run that finds nothing in time is reported in `attempts` and to
+// request.on_failure (it is not an error). Throws InputError for a bad request (count < 1, time_s
+// <= 0, start or goal of the wrong dimension, out of bounds or in collision) and
+// Error(kCancelled/kDeadlineExceeded) when request.cancel stops it. Thread safe, but runs one OMPL
+// planner at a time per process (see "Determinism").
 PlanResult PlanPaths(const MotionChecker& checker, const PlanRequest& request);
 
 }  // namespace hgraph

@@ -16,7 +16,7 @@ import grpc
 import pytest
 
 import hgraph_client
-from hgraph.v1 import merge_pb2, service_pb2, service_pb2_grpc
+from hgraph.v1 import merge_pb2, scene_pb2, service_pb2, service_pb2_grpc, space_pb2
 from test_service import DATA, Server, densified, input_paths
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
@@ -213,6 +213,62 @@ def test_waypoint_sources_say_with_presence_what_the_parallel_arrays_say(client)
             assert (source.input, source.edge, source.fraction) == (path, index, fraction)
 
 
+def test_a_result_says_whether_its_hgraph_was_kept(client):
+    merged = client.merge(input_paths())
+    assert merged.retention == service_pb2.RETENTION_KEPT and merged.kept
+    assert merged.hgraph and merged.generation == 1
+    channel, stub = raw(client)
+    metadata = [("x-hgraph-session", client.session)]
+    requery = stub.Requery(service_pb2.RequeryRequest(hgraph=merged.hgraph), timeout=30,
+                           metadata=metadata)
+    assert requery.retention == service_pb2.RETENTION_KEPT
+    assert requery.hgraph == merged.hgraph
+    extra = [[list(q.values) for q in p.waypoints] for p in input_paths().paths]
+    added = client.add_paths(merged.hgraph, extra)
+    assert added.retention == service_pb2.RETENTION_KEPT and added.hgraph == merged.hgraph
+    channel.close()
+
+
+def test_an_hgraph_larger_than_the_cache_is_not_kept_and_the_result_says_so():
+    s = Server("--cache-bytes", str(300_000))
+    try:
+        with s.client() as c:
+            c.create_session(c.upload_scene(DATA / "scene.json"))
+            big = c.merge(densified(30), variant="all-pairs", hgraph_id="too-big")
+            # The result stands; the H-Graph is not held, and the response says why instead of
+            # leaving only an empty name.
+            assert big.result.path.waypoints and big.result.quality.length > 0
+            assert big.retention == service_pb2.RETENTION_TOO_LARGE and not big.kept
+            assert big.hgraph == "" and big.generation == 0
+            assert list(c.get_session().hgraphs) == []
+            with pytest.raises(hgraph_client.HgraphError) as e:
+                c.get_hgraph(c.session + "/hgraphs/too-big")
+            assert e.value.reason == "HGRAPH_NOT_FOUND"
+            # A small merge on the same server is kept.
+            small = c.merge(input_paths(), optimize_ms=0)
+            assert small.kept and small.hgraph
+    finally:
+        assert s.stop() == 0, "".join(s.log)
+
+
+def test_an_hgraph_whose_session_ended_during_the_merge_is_not_kept(client):
+    request = service_pb2.MergePathsRequest(
+        session=client.session, paths=hgraph_client.make_paths(densified(40)),
+        options=merge_pb2.MergeOptions(variant=merge_pb2.VARIANT_ALL_PAIRS),
+        progress_interval_ms=10)
+    call = client.merge_stream(request, timeout=120)
+    events = iter(call)
+    for event in events:
+        if event.HasField("progress") and event.progress.phase == "check":
+            break
+    # Deleted while the merge checks its bridge candidates (seconds of work left).
+    client.delete_session()
+    last = list(events)[-1]
+    assert last.HasField("result") and last.result.path.waypoints
+    assert last.retention == service_pb2.RETENTION_SESSION_ENDED
+    assert last.hgraph == "" and last.generation == 0
+
+
 def test_the_example_runs_and_prints_no_input_it_does_not_know(server):
     import subprocess
     import sys
@@ -345,7 +401,12 @@ def test_a_merge_that_outlived_its_client_stops_at_shutdown():
                                            optimize_ms=60000),
             hgraph_id="orphan")
         call = c.merge_stream(request, timeout=120)
-        next(call)
+        # Into its checks before the stop: building the all-pairs candidates (4.5 million) does
+        # not look at the cancel token and took 12 s on a loaded 2-core machine, past the stop's
+        # 20 s under heavier load; the checks stop at once.
+        for event in call:
+            if event.HasField("progress") and event.progress.phase == "check":
+                break
         call.cancel()
         assert c.get_hgraph(c.session + "/hgraphs/orphan").state == \
             service_pb2.HGraph.STATE_RUNNING
@@ -369,6 +430,177 @@ def test_a_merge_without_an_hgraph_id_stops_with_its_client(client):
     # Nothing was kept (a small merge afterwards is the only H-Graph).
     merged = client.merge(input_paths())
     assert list(client.get_session().hgraphs) == [merged.hgraph]
+
+
+# Metadata and sizes -----------------------------------------------------------------------------
+
+def dense_path(waypoints):
+    """Input 0 of the circles problem with its edges cut into equal pieces: the same motion in
+    about `waypoints` waypoints."""
+    w = [list(q.values) for q in input_paths().paths[0].waypoints]
+    n = max(1, waypoints // (len(w) - 1))
+    out = [[a[j] + (b[j] - a[j]) * i / n for j in range(len(a))]
+           for a, b in zip(w, w[1:]) for i in range(n)]
+    return out + [w[-1]]
+
+
+def test_every_rpc_states_its_metadata_and_response_size():
+    text = (PROTO / "service.proto").read_text()
+    service = text[text.index("service PathMerger {"):text.index("message FindMissingBlobsRequest")]
+    comment = []
+    rpcs = {}
+    for line in service.splitlines()[1:]:
+        line = line.strip()
+        if line.startswith("//"):
+            comment.append(line[2:].strip())
+        elif line.startswith("rpc "):
+            rpcs[line.split()[1].split("(")[0]] = " ".join(comment)
+            comment = []
+        elif not line:
+            comment = []
+    # Every method of the service, each with its own comment.
+    assert sorted(rpcs) == sorted(service_pb2.DESCRIPTOR.services_by_name["PathMerger"]
+                                  .methods_by_name)
+    for rpc, text in rpcs.items():
+        metadata = text[text.index("Metadata:"):] if "Metadata:" in text else ""
+        assert "authorization" in metadata, f"{rpc}: no 'Metadata:' naming authorization"
+        assert "Response:" in text, f"{rpc}: no 'Response:' stating its size"
+
+
+def test_a_response_over_4_mib_needs_the_64_mib_receive_limit():
+    # One input of 150,000 waypoints: nothing to bridge, so the merged path is the input itself
+    # and its result (waypoints and their sources) is larger than gRPC's default 4 MiB.
+    s = Server("--max-waypoints", "200000")
+    try:
+        with s.client() as c:
+            c.create_session(c.upload_scene(DATA / "scene.json"))
+            merged = c.merge([dense_path(150_000)], optimize_ms=0)
+            size = merged.result.ByteSize()
+            assert size > 4 << 20, size
+            assert len(merged.result.path.waypoints) > 130_000
+            metadata = [("x-hgraph-session", c.session)]
+            request = service_pb2.GetHGraphRequest(name=merged.hgraph)
+            # A raw stub with gRPC's default receive limit: the server answers, the client
+            # refuses the message.
+            channel = grpc.insecure_channel(s.target)
+            with pytest.raises(grpc.RpcError) as e:
+                service_pb2_grpc.PathMergerStub(channel).GetHGraph(request, timeout=60,
+                                                                   metadata=metadata)
+            assert e.value.code() == grpc.StatusCode.RESOURCE_EXHAUSTED, e.value
+            channel.close()
+            # The same call with the documented 64 MiB receives it whole.
+            channel = grpc.insecure_channel(
+                s.target, options=[("grpc.max_receive_message_length", 64 << 20)])
+            graph = service_pb2_grpc.PathMergerStub(channel).GetHGraph(request, timeout=60,
+                                                                       metadata=metadata)
+            assert graph.result == merged.result
+            channel.close()
+    finally:
+        assert s.stop() == 0, "".join(s.log)
+
+
+# Planning ---------------------------------------------------------------------------------------
+
+def two_rooms_scene():
+    """A point robot in a box split by a wall: start and goal in different rooms, so that every
+    planning attempt fails, whatever its seed or time."""
+    scene = scene_pb2.Scene(name="two-rooms")
+    scene.space.components.add(type=space_pb2.Component.TYPE_RN, dimension=2, lower=[0, 0],
+                               upper=[10, 10])
+    wall = scene.obstacles.add(name="wall")
+    wall.shape.box.size.extend([0.5, 20, 1])
+    wall.pose.position.extend([5, 5, 0])
+    scene.robot.add(name="point").shape.sphere.radius = 0.1
+    scene.start.values.extend([2, 5])
+    scene.goal.values.extend([8, 5])
+    return scene
+
+
+def test_plan_paths_reports_each_failed_attempt(server):
+    with server.client() as c:
+        c.create_session(c.upload_scene(two_rooms_scene()))
+        planned = c.plan(count=3, planner="rrt-connect", time_per_path_s=0.05, seed=9)
+        assert list(planned) == []
+        assert [f.index for f in planned.failures] == [0, 1, 2]
+        for f in planned.failures:
+            assert f.failure.reason == service_pb2.PlanAttemptFailure.REASON_NO_SOLUTION
+            assert f.failure.planner == "rrtconnect"
+            assert f.failure.message.startswith("no path in 0.05 s (OMPL: "), f.failure.message
+            assert not f.failure.HasField("invalid_edge")
+        seeds = [f.failure.seed for f in planned.failures]
+        assert len(set(seeds)) == 3
+        # The same request draws the same seeds; another seed others.
+        again = c.plan(count=3, planner="rrtconnect", time_per_path_s=0.05, seed=9)
+        assert [f.failure.seed for f in again.failures] == seeds
+        other = c.plan(count=1, planner="rrtconnect", time_per_path_s=0.05, seed=10)
+        assert other.failures[0].failure.seed not in seeds
+        # Without report_failures the stream stays as older readers know it: paths only.
+        channel, stub = raw(server)
+        request = service_pb2.PlanPathsRequest(session=c.session, planner="rrtconnect", count=2,
+                                               time_per_path_s=0.05)
+        assert list(stub.PlanPaths(request, timeout=60,
+                                   metadata=[("x-hgraph-session", c.session)])) == []
+        request.report_failures = True
+        events = list(stub.PlanPaths(request, timeout=60,
+                                     metadata=[("x-hgraph-session", c.session)]))
+        assert [e.index for e in events] == [0, 1]
+        assert all(e.HasField("failure") and not e.HasField("path") for e in events)
+        channel.close()
+
+
+def test_plan_paths_that_find_every_path_report_no_failure(client):
+    request = service_pb2.PlanPathsRequest(session=client.session, planner="rrtconnect", count=2,
+                                           time_per_path_s=2.0, seed=7, report_failures=True)
+    request.start.values.extend([30, 62])
+    request.goal.values.extend([67, 35])
+    channel, stub = raw(client)
+    events = list(stub.PlanPaths(request, timeout=60,
+                                 metadata=[("x-hgraph-session", client.session)]))
+    assert sorted(e.index for e in events) == [0, 1]
+    assert all(e.HasField("path") and not e.HasField("failure") for e in events)
+    channel.close()
+
+
+# A merge that spends its deadline ---------------------------------------------------------------
+
+def test_a_merge_spends_what_is_left_of_its_deadline_and_still_answers(client):
+    # A small radius keeps the bridges from the post-optimization's new points few, so that its
+    # overlay grows slowly and the deadline ends it, not the growth limit (on the development
+    # machine that limit comes after about 1.5 s of rounds; this budget is about 0.5 s).
+    merged = client.merge(input_paths(), options=merge_pb2.MergeOptions(radius=1e-3),
+                          optimize_to_deadline=True, timeout=0.6)
+    result = merged.result
+    # A whole answer (not the best-so-far of a stream cut by the deadline), which says that the
+    # deadline stopped the post-optimization.
+    assert merged.complete and merged.kept
+    assert result.stats.optimize_stop == merge_pb2.OPTIMIZE_STOP_DEADLINE
+    assert result.stats.optimize_rounds > 0
+    assert result.objective <= result.hgraph_objective
+    assert len(result.inputs) == 2 and result.HasField("timing")
+    report = client.check([result.path]).paths[0]
+    assert report.valid and report.certified
+    # A margin larger than the time left leaves no post-optimization: the H-Graph's optimum
+    # answers, and the result says why nothing more was tried.
+    quick = client.merge(input_paths(), optimize_to_deadline=True, deadline_margin_ms=600000,
+                         timeout=30).result
+    assert quick.stats.optimize_stop == merge_pb2.OPTIMIZE_STOP_DEADLINE
+    assert quick.stats.optimize_rounds == 0
+    assert quick.objective == quick.hgraph_objective
+
+
+def test_a_merge_to_its_deadline_needs_a_deadline_and_no_optimize_ms(client):
+    with pytest.raises(hgraph_client.HgraphError) as e:
+        client.merge(input_paths(), optimize_to_deadline=True)
+    assert e.value.code == grpc.StatusCode.INVALID_ARGUMENT
+    assert e.value.field == "options.optimize_to_deadline"
+    assert "deadline" in e.value.message
+    with pytest.raises(hgraph_client.HgraphError) as e:
+        client.merge(input_paths(), optimize_to_deadline=True, optimize_ms=100, timeout=30)
+    assert e.value.code == grpc.StatusCode.INVALID_ARGUMENT
+    assert e.value.field == "options.optimize_ms"
+    # Without the option a margin changes nothing (the stated range still holds).
+    plain = client.merge(input_paths(), deadline_margin_ms=10, timeout=30).result
+    assert plain.stats.optimize_stop != merge_pb2.OPTIMIZE_STOP_DEADLINE
 
 
 # Listing ----------------------------------------------------------------------------------------

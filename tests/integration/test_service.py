@@ -324,7 +324,7 @@ def test_put_scene_names_field_of_file_path_mesh(server):
 def test_plan_then_merge_planned_paths(client):
     planned = client.plan(count=3, planner="rrtconnect", time_per_path_s=2.0, seed=7,
                           start=[30, 62], goal=[67, 35])
-    assert len(planned) == 3
+    assert len(planned) == 3 and planned.failures == []
     merged = client.merge(planned, measure="length")
     assert merged.result.quality.length <= min(i.quality.length for i in merged.result.inputs)
 

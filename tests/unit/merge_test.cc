@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <functional>
 #include <mutex>
@@ -796,6 +797,36 @@ TEST_F(MergeTest, PostOptimizationShortensWithCertifiedMotionsAndStreamsEachImpr
     made = made || r.source_path[j] < 0 || r.source_fraction[j] > 0;
   }
   EXPECT_TRUE(made);
+}
+
+// A query's optimize_until (the server's MergeOptions.optimize_to_deadline) is a budget in time
+// that ends then: one already passed leaves the H-Graph's optimum and says so; a later one runs
+// rounds, restarts included, until it comes (or the overlay's growth limit), and its answer is
+// certified. Only what stopped the rounds is checked, never how long they took.
+TEST_F(MergeTest, OptimizeUntilEndsThePostOptimizationAndSaysSo) {
+  const LocalPlanner planner = MakePlanner();
+  HybridizationSession session(planner, MergeRequest{.paths = CirclePaths()});
+  const auto now = std::chrono::steady_clock::now();
+  const MergeResult passed = session.Query({}, {}, {}, std::nullopt, now);
+  EXPECT_EQ(passed.stats.optimize_stop, OptimizeStop::kDeadline);
+  EXPECT_EQ(passed.stats.optimize_rounds, 0);
+  EXPECT_DOUBLE_EQ(passed.objective, passed.hgraph_objective);
+  const MergeResult spent = session.Query(
+      {}, {}, {}, std::nullopt, std::chrono::steady_clock::now() + std::chrono::seconds(1));
+  EXPECT_TRUE(spent.stats.optimize_stop == OptimizeStop::kDeadline ||
+              spent.stats.optimize_stop == OptimizeStop::kGrowth)
+      << OptimizeStopName(spent.stats.optimize_stop);
+  EXPECT_GT(spent.stats.optimize_rounds, 0);
+  EXPECT_LE(spent.objective, spent.hgraph_objective);
+  const PathCheckResult check = CheckPaths(planner, PathCheckRequest{.paths = {spent.path}});
+  EXPECT_TRUE(check.paths.at(0).valid && check.paths.at(0).certified);
+  // With optimize_ms too, the shorter budget holds and names the stop: here optimize_ms.
+  HybridizationSession timed(planner,
+                             MergeRequest{.paths = CirclePaths(), .options = {.optimize_ms = 1}});
+  const MergeResult shorter = timed.Query({}, {}, {}, std::nullopt,
+                                          std::chrono::steady_clock::now() + std::chrono::hours(1));
+  EXPECT_EQ(shorter.stats.optimize_stop, OptimizeStop::kTime);
+  EXPECT_STREQ(OptimizeStopName(OptimizeStop::kDeadline), "deadline");
 }
 
 TEST_F(MergeTest, AddPathsGrowsTheHGraphLikeMergingEverythingAtOnce) {

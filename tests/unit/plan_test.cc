@@ -191,6 +191,62 @@ TEST(PlanNoPathTest, NoPathInTimeIsReportedNotThrown) {
   }
 }
 
+TEST(PlanNoPathTest, EachFailedAttemptReachesOnFailureWithItsReasonAndSeed) {
+  // The two rooms again: every attempt fails, whatever its seed.
+  auto scene = std::make_shared<Scene>(Scene{
+      .name = "two-rooms",
+      .space = Space::RealVector(Eigen::Vector2d(0, 0), Eigen::Vector2d(10, 10)),
+  });
+  Obstacle wall{.name = "wall",
+                .shape = Shape{.type = ShapeType::kBox, .box_size = Eigen::Vector3d(0.5, 20, 1)}};
+  wall.pose.translation() = Eigen::Vector3d(5, 5, 0);
+  scene->obstacles.push_back(wall);
+  scene->robot.push_back(
+      RobotBody{.name = "point", .shape = Shape{.type = ShapeType::kSphere, .radius = 0.1}});
+  auto world = std::make_shared<const CollisionWorld>(scene);
+  const LocalPlanner planner(world);
+  std::vector<PlanAttempt> failures;
+  int paths = 0;
+  const PlanResult result =
+      PlanPaths(planner, {.planner = PlannerType::kRRTConnect,
+                          .start = Eigen::Vector2d(2, 5),
+                          .goal = Eigen::Vector2d(8, 5),
+                          .count = 3,
+                          .time_s = 0.05,
+                          .seed = 42,
+                          .on_path = [&](int, const InputPath&, double) { ++paths; },
+                          .on_failure = [&](const PlanAttempt& a) { failures.push_back(a); }});
+  EXPECT_EQ(paths, 0);
+  ASSERT_EQ(failures.size(), 3u);
+  for (int i = 0; i < 3; ++i) {
+    SCOPED_TRACE(i);
+    const PlanAttempt& a = failures[i];
+    EXPECT_EQ(a.index, i);  // in index order, one each
+    EXPECT_FALSE(a.found);
+    EXPECT_EQ(a.failure, PlanFailure::kNoSolution);
+    EXPECT_EQ(a.seed, PlanAttemptSeed(42, i));
+    EXPECT_EQ(a.invalid_edge, -1);
+    EXPECT_NE(a.status.find("no path in 0.05 s (OMPL: "), std::string::npos) << a.status;
+    EXPECT_EQ(a.status, result.attempts[i].status);
+  }
+  // Every attempt draws its own seed.
+  EXPECT_NE(failures[0].seed, failures[1].seed);
+}
+
+TEST_F(PlanTest, AttemptsThatFindAPathDoNotReachOnFailure) {
+  PlanRequest request = MazeRequest(*maze_, PlannerType::kRRTConnect, 3);
+  int failures = 0;
+  request.on_failure = [&](const PlanAttempt&) { ++failures; };
+  const PlanResult result = PlanPaths(*maze_->planner, request);
+  ASSERT_EQ(result.paths.size(), 2u);
+  EXPECT_EQ(failures, 0);
+  for (const PlanAttempt& a : result.attempts) {
+    EXPECT_TRUE(a.found);
+    EXPECT_EQ(a.failure, PlanFailure::kNone);
+    EXPECT_EQ(a.seed, PlanAttemptSeed(3, a.index));
+  }
+}
+
 TEST_F(PlanTest, BadRequestsNameTheField) {
   const auto field_of = [&](PlanRequest request) {
     try {

@@ -9,6 +9,7 @@
         quick = client.merge(paths, timeout=0.5, best_so_far=True)  # quick.complete: finished
         again = client.requery(merged.hgraph, measure="inverse-clearance")
         checked = client.check(paths)  # each path as a merge checks its inputs
+        planned = client.plan(count=4)  # the paths found; planned.failures: why others were not
 
 Install: `/usr/bin/python3 -m pip install ./client/python` (the hgraph.v1 stubs are generated
 while it builds; README.md beside pyproject.toml). In a build tree, CMake also builds them into
@@ -21,10 +22,11 @@ grpc.RpcError's trailing metadata).
 Every call carries the session's name in `x-hgraph-session` (session affinity behind a load
 balancer); merge, check and plan recover from a lost replica with retries and backoff (Client).
 """
-from hgraph_client.client import (CheckOutcome, Client, HgraphError, MergeOutcome, Progress,
-                                  StopMerge, connect, load_paths_text, make_measure, make_paths)
+from hgraph_client.client import (CheckOutcome, Client, HgraphError, MergeOutcome, PlanFailure,
+                                  PlanOutcome, Progress, StopMerge, connect, load_paths_text,
+                                  make_measure, make_paths)
 from hgraph_client.status import ErrorDetails, decode as decode_error_details
 
-__all__ = ["CheckOutcome", "Client", "ErrorDetails", "HgraphError", "MergeOutcome", "Progress",
-           "StopMerge", "connect", "decode_error_details", "load_paths_text", "make_measure",
+__all__ = ["CheckOutcome", "Client", "ErrorDetails", "HgraphError", "MergeOutcome", "PlanFailure",
+           "PlanOutcome", "Progress", "StopMerge", "connect", "decode_error_details", "load_paths_text", "make_measure",
            "make_paths"]

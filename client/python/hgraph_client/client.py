@@ -100,8 +100,8 @@ class Progress:
 @dataclasses.dataclass
 class MergeOutcome:
     result: merge_pb2.MergeResult
-    # "sessions/<id>/hgraphs/<hgraph id>": pass to Client.requery. Empty if the server could not
-    # keep it.
+    # "sessions/<id>/hgraphs/<hgraph id>": pass to Client.requery. Empty if the server did not
+    # keep it (`retention` says why).
     hgraph: str
     progress_events: int
     # False when the call stopped early (best_so_far and the deadline, or StopMerge) and `result`
@@ -110,6 +110,33 @@ class MergeOutcome:
     complete: bool = True
     # The H-Graph's generation (1 after a merge; AddPaths increments it); 0 when not kept.
     generation: int = 0
+    # service_pb2.RETENTION_*: KEPT, or why the H-Graph was not kept (TOO_LARGE for
+    # --cache-bytes, SESSION_ENDED when the session went away while the merge ran);
+    # UNSPECIFIED when the call stopped early (complete False) or the server predates it.
+    retention: int = service_pb2.RETENTION_UNSPECIFIED
+
+    @property
+    def kept(self) -> bool:
+        """Whether the server holds the H-Graph for requery, add_paths and get_hgraph."""
+        return self.retention == service_pb2.RETENTION_KEPT
+
+
+@dataclasses.dataclass
+class PlanFailure:
+    # The attempt's index in the request's count, its planning time, and why it found no path
+    # (service_pb2.PlanAttemptFailure: reason, planner, seed, message, invalid_edge).
+    index: int
+    elapsed_ms: float
+    failure: service_pb2.PlanAttemptFailure
+
+
+class PlanOutcome(list):
+    """The paths PlanPaths found (path_pb2.Path, in index order), as a list; `failures` holds a
+    PlanFailure for each attempt that found none."""
+
+    def __init__(self, paths=()):
+        super().__init__(paths)
+        self.failures: list = []
 
 
 @dataclasses.dataclass
@@ -439,6 +466,7 @@ class Client:
               optimize_ms: Optional[float] = None, restarts: Optional[int] = None,
               partial_shortcuts: Optional[bool] = None,
               progress_paths: Optional[bool] = None, best_so_far: bool = False,
+              optimize_to_deadline: bool = False, deadline_margin_ms: Optional[float] = None,
               session: Optional[str] = None,
               on_progress: Optional[Callable[[Progress], None]] = None,
               progress_interval_ms: int = 0, seed: int = 0, hgraph_id: str = "",
@@ -465,6 +493,11 @@ class Client:
         on_progress callback may raise StopMerge to end the call at once: the merge then returns
         the best path streamed so far, or raises HgraphError(CANCELLED) if none came yet.
 
+        `optimize_to_deadline` spends what is left of `timeout` on the post-optimization and
+        still answers with a complete result before it (MergeOptions.optimize_to_deadline;
+        result.stats.optimize_stop says OPTIMIZE_STOP_DEADLINE when the time ran out), keeping
+        `deadline_margin_ms` back for the answer (unset: a tenth of the time, at least 50 ms).
+
         `hgraph_id` names the H-Graph ("sessions/<id>/hgraphs/<hgraph_id>"): a repeat of the same
         call returns the first merge's result, and the merge finishes (and is kept) even if
         this call ends first: get_hgraph(name) then returns its result."""
@@ -474,14 +507,16 @@ class Client:
             report_inputs=report_inputs, report_clearance=report_clearance,
             optimize_ms=optimize_ms, restarts=restarts,
             partial_shortcuts=partial_shortcuts, progress_paths=progress_paths,
-            best_so_far=best_so_far, session=session, on_progress=on_progress,
+            best_so_far=best_so_far, optimize_to_deadline=optimize_to_deadline,
+            deadline_margin_ms=deadline_margin_ms, session=session, on_progress=on_progress,
             progress_interval_ms=progress_interval_ms, seed=seed, hgraph_id=hgraph_id,
             timeout=timeout), session)
 
     def _merge(self, paths, *, measure, k, safety, variant, options, max_node_spacing,
                evaluation, report_inputs, report_clearance, optimize_ms, restarts,
-               partial_shortcuts, progress_paths, best_so_far, session, on_progress,
-               progress_interval_ms, seed, hgraph_id, timeout) -> MergeOutcome:
+               partial_shortcuts, progress_paths, best_so_far, optimize_to_deadline,
+               deadline_margin_ms, session, on_progress, progress_interval_ms, seed, hgraph_id,
+               timeout) -> MergeOutcome:
         opts = merge_pb2.MergeOptions()
         if options is not None:
             opts.CopyFrom(options)
@@ -505,6 +540,10 @@ class Client:
             opts.progress_paths = progress_paths
         if best_so_far:
             opts.progress_paths = True
+        if optimize_to_deadline:
+            opts.optimize_to_deadline = True
+        if deadline_margin_ms is not None:
+            opts.deadline_margin_ms = deadline_margin_ms
         request = service_pb2.MergePathsRequest(
             session=session or self.session or "", paths=make_paths(paths),
             measure=make_measure(measure, k, safety), options=opts, seed=seed,
@@ -533,7 +572,8 @@ class Client:
                                              p.distance_queries, p.elapsed_ms, objective, path))
                 elif event.HasField("result"):
                     return MergeOutcome(event.result, event.hgraph, events,
-                                        generation=event.generation)
+                                        generation=event.generation,
+                                        retention=event.retention)
         except StopMerge:
             call.cancel()
             if best is None:
@@ -618,21 +658,30 @@ class Client:
     def plan(self, *, count: int = 1, planner: str = "", time_per_path_s: float = 0,
              seed: int = 1, simplify: bool = False, session: Optional[str] = None,
              start: Optional[Sequence[float]] = None, goal: Optional[Sequence[float]] = None,
-             timeout: Optional[float] = None) -> list:
-        """Plans input paths with the server's OMPL planners; returns the Path messages."""
+             timeout: Optional[float] = None) -> "PlanOutcome":
+        """Plans input paths with the server's OMPL planners; returns the Path messages found
+        (a list), with the attempts that found none in its `failures`."""
         def call():
             request = service_pb2.PlanPathsRequest(
                 session=session or self.session or "", planner=planner, count=count,
-                time_per_path_s=time_per_path_s, seed=seed, simplify=simplify)
+                time_per_path_s=time_per_path_s, seed=seed, simplify=simplify,
+                report_failures=True)
             if start is not None:
                 request.start.values.extend(start)
             if goal is not None:
                 request.goal.values.extend(goal)
+            outcome = PlanOutcome()
             try:
-                return [event.path for event in self.stub.PlanPaths(
-                    request, timeout=timeout, metadata=self._metadata(request.session))]
+                for event in self.stub.PlanPaths(request, timeout=timeout,
+                                                 metadata=self._metadata(request.session)):
+                    if event.HasField("failure"):
+                        outcome.failures.append(PlanFailure(event.index, event.elapsed_ms,
+                                                            event.failure))
+                    else:
+                        outcome.append(event.path)
             except grpc.RpcError as e:
                 _raise(e)
+            return outcome
 
         return self._recovering(call, session)
 
