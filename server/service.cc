@@ -37,6 +37,9 @@ PathMergerService::PathMergerService(const ServerOptions& options, Metrics& metr
     if (kind == CacheKind::kHGraph) sessions_.RemoveHGraph(key);
     spdlog::info("cache evicted {} {}", CacheKindName(kind), key);
   });
+  SetMessageAllocatorFor_GetHGraph(&get_hgraph_messages_);
+  SetMessageAllocatorFor_Requery(&requery_messages_);
+  SetMessageAllocatorFor_AddPaths(&add_paths_messages_);
 }
 
 PathMergerService::~PathMergerService() { pool_.WaitIdle(); }

@@ -14,6 +14,7 @@
 
 #include "core/common/progress.h"
 #include "hgraph/v1/service.grpc.pb.h"
+#include "server/arena_allocator.h"
 #include "server/auth.h"
 #include "server/mesh_importer.h"
 #include "server/metrics.h"
@@ -154,6 +155,10 @@ class PathMergerService final : public v1::PathMerger::CallbackService {
   bool shutting_down_ = false;
   uint64_t next_durable_ = 0;
   std::map<uint64_t, CancelToken> durable_;  // merges that outlive their clients
+  // The responses that carry a merged path (arena_allocator.h).
+  ArenaMessageAllocator<v1::GetHGraphRequest, v1::HGraph> get_hgraph_messages_;
+  ArenaMessageAllocator<v1::RequeryRequest, v1::RequeryResponse> requery_messages_;
+  ArenaMessageAllocator<v1::AddPathsRequest, v1::AddPathsResponse> add_paths_messages_;
 };
 
 }  // namespace hgraph::server

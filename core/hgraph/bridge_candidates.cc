@@ -24,6 +24,11 @@ class PairCollector {
     if (graph_.FindEdge(u, v) >= 0) return;
     pairs_.emplace_back(u, v);
   }
+  // A pair u < v that no other call adds (all-pairs and neighborhood visit each pair once): no
+  // duplicate test, which costs more than the rest for millions of pairs.
+  void AddOnce(int u, int v) {
+    if (graph_.FindEdge(u, v) < 0) pairs_.emplace_back(u, v);
+  }
   std::vector<std::pair<int, int>> Take() { return std::move(pairs_); }
 
  private:
@@ -132,7 +137,11 @@ CandidateOptions Resolved(const CandidateOptions& options, const CandidateSet& s
 }
 
 CandidateSet BridgeCandidates(const HGraph& graph, const Space& space,
-                              const CandidateOptions& options, CandidatesSince since) {
+                              const CandidateOptions& options, CandidatesSince since,
+                              const CancelToken* cancel) {
+  const auto poll = [cancel] {
+    if (cancel != nullptr) cancel->ThrowIfStopped();
+  };
   ValidateCandidateOptions(options);
   CandidateSet set;
   const double scale = MeanInputEdgeLength(graph, space);
@@ -144,19 +153,22 @@ CandidateSet BridgeCandidates(const HGraph& graph, const Space& space,
   switch (options.variant) {
     case Variant::kAllPairs:
       for (int u = 0; u < n; ++u) {
-        for (int v = std::max(u + 1, since.nodes); v < n; ++v) out.Add(u, v);
+        poll();
+        for (int v = std::max(u + 1, since.nodes); v < n; ++v) out.AddOnce(u, v);
       }
       break;
     case Variant::kNeighborhood:
       for (int u = 0; u < n; ++u) {
+        poll();
         for (int v = std::max(u + 1, since.nodes); v < n; ++v) {
-          if (space.Distance(graph.node(u).q, graph.node(v).q) <= set.radius) out.Add(u, v);
+          if (space.Distance(graph.node(u).q, graph.node(v).q) <= set.radius) out.AddOnce(u, v);
         }
       }
       break;
     case Variant::kKNearest: {
       std::vector<std::pair<double, int>> near;
       for (int u = 0; u < n; ++u) {
+        poll();
         near.clear();
         for (int v = 0; v < n; ++v) {
           if (v != u) near.emplace_back(space.Distance(graph.node(u).q, graph.node(v).q), v);
@@ -175,6 +187,7 @@ CandidateSet BridgeCandidates(const HGraph& graph, const Space& space,
           options.variant == Variant::kEditDistanceNeighborhood ? set.radius : 0.0;
       for (int a = 0; a < graph.num_paths(); ++a) {
         for (int b = std::max(a + 1, since.paths); b < graph.num_paths(); ++b) {
+          poll();
           AddAlignmentBridges(graph, space, a, b, set.gap_init, set.gap_extend, radius, out);
           ++set.alignments;
         }

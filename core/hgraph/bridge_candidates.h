@@ -6,6 +6,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/common/progress.h"
 #include "core/hgraph/hgraph.h"
 
 namespace hgraph {
@@ -56,8 +57,11 @@ struct CandidatesSince {
   int nodes = 0;
   int paths = 0;
 };
+// `cancel` (may be null) is polled once per node or per pair of paths: all-pairs over a dense
+// H-Graph makes millions of pairs.
 CandidateSet BridgeCandidates(const HGraph& graph, const Space& space,
-                              const CandidateOptions& options, CandidatesSince since = {});
+                              const CandidateOptions& options, CandidatesSince since = {},
+                              const CancelToken* cancel = nullptr);
 // The options with the parameters `set` resolved (radius, gaps) made explicit.
 CandidateOptions Resolved(const CandidateOptions& options, const CandidateSet& set);
 

@@ -4,6 +4,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstddef>
 #include <limits>
 #include <utility>
 
@@ -331,7 +332,15 @@ void LazyEdgeEvaluator::ProbeProfileGrids(const std::vector<int>& edge_ids,
                                  evidence_.probes[pieces[k].edge], ProbeOrder::kDistanceOnly);
   });
   cancel.ThrowIfStopped();
-  for (size_t k = 0; k < pieces.size(); ++k) AddProbes(pieces[k].edge, found[k]);
+  // An edge's pieces are consecutive: their probes go in at once.
+  for (size_t k = 0; k < pieces.size();) {
+    const int e = pieces[k].edge;
+    std::vector<ClearanceSample> probes;
+    for (; k < pieces.size() && pieces[k].edge == e; ++k) {
+      probes.insert(probes.end(), found[k].begin(), found[k].end());
+    }
+    AddProbes(e, probes);
+  }
 }
 
 void LazyEdgeEvaluator::AddProbes(int e, const std::vector<ClearanceSample>& found,
@@ -341,10 +350,14 @@ void LazyEdgeEvaluator::AddProbes(int e, const std::vector<ClearanceSample>& fou
                                       witnesses->end());
     evidence_.ceiling_done[e] = 0;
   }
+  // The known probes stay sorted by t: the new ones are sorted and merged in, linear in what is
+  // known (an edge at a fine resolution gathers a million probes, in tens of thousands of calls).
+  const auto by_t = [](const ClearanceSample& a, const ClearanceSample& b) { return a.t < b.t; };
   std::vector<ClearanceSample>& known = evidence_.probes[e];
+  const auto old_end = static_cast<std::ptrdiff_t>(known.size());
   known.insert(known.end(), found.begin(), found.end());
-  std::sort(known.begin(), known.end(),
-            [](const ClearanceSample& a, const ClearanceSample& b) { return a.t < b.t; });
+  std::sort(known.begin() + old_end, known.end(), by_t);
+  std::inplace_merge(known.begin(), known.begin() + old_end, known.end(), by_t);
 }
 
 int64_t LazyEdgeEvaluator::ComputeNodeClearances(const CancelToken& cancel) {

@@ -112,7 +112,8 @@ HybridizationSession::HybridizationSession(const ClearanceChecker& checker,
 
   phase = Clock::now();
   request.cancel.ThrowIfStopped();
-  const CandidateSet candidates = BridgeCandidates(graph_, space, options_.candidates);
+  const CandidateSet candidates =
+      BridgeCandidates(graph_, space, options_.candidates, {}, &request.cancel);
   const bool aligned = options_.candidates.variant == Variant::kEditDistance ||
                        options_.candidates.variant == Variant::kEditDistanceNeighborhood;
   (aligned ? build_timing_.align_ms : build_timing_.candidates_ms) = MsSince(phase);
@@ -120,7 +121,11 @@ HybridizationSession::HybridizationSession(const ClearanceChecker& checker,
   candidates_ = Resolved(options_.candidates, candidates);
   std::vector<int> bridge_edges;
   bridge_edges.reserve(candidates.pairs.size());
-  for (const auto& [u, v] : candidates.pairs) bridge_edges.push_back(AddEdgeWithEvidence(u, v));
+  for (const auto& [u, v] : candidates.pairs) {
+    constexpr size_t kPollEvery = 4096;  // millions of pairs for all-pairs on a dense H-Graph
+    if (bridge_edges.size() % kPollEvery == 0) request.cancel.ThrowIfStopped();
+    bridge_edges.push_back(AddEdgeWithEvidence(u, v));
+  }
 
   if (eager) {
     phase = Clock::now();

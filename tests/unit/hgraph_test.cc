@@ -139,6 +139,29 @@ TEST(BridgeCandidatesTest, AllPairsCoversEveryNonEdgePair) {
   EXPECT_EQ(static_cast<int>(set.pairs.size()), n * (n - 1) / 2 - graph.num_edges());
 }
 
+TEST(BridgeCandidatesTest, EveryVariantStopsAtAStoppedTokenAndGoesOnWithALiveOne) {
+  std::mt19937_64 rng(5);
+  const Space space = Plane();
+  HGraph graph(space, RandomPaths(rng, 3, 6), 1e-9);
+  for (Variant variant : {Variant::kAllPairs, Variant::kNeighborhood, Variant::kKNearest,
+                          Variant::kEditDistance, Variant::kEditDistanceNeighborhood}) {
+    const CandidateOptions options{.variant = variant, .radius = 2.5};
+    CancelToken live;
+    const CandidateSet set = BridgeCandidates(graph, space, options, {}, &live);
+    EXPECT_EQ(set.pairs, BridgeCandidates(graph, space, options).pairs) << VariantName(variant);
+    std::set<std::pair<int, int>> unique(set.pairs.begin(), set.pairs.end());
+    EXPECT_EQ(unique.size(), set.pairs.size()) << VariantName(variant);
+    CancelToken stopped;
+    stopped.Cancel();
+    try {
+      BridgeCandidates(graph, space, options, {}, &stopped);
+      ADD_FAILURE() << VariantName(variant) << ": a stopped token did not stop it";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), ErrorCode::kCancelled) << VariantName(variant);
+    }
+  }
+}
+
 TEST(BridgeCandidatesTest, NeighborhoodRespectsRadiusAndKnnCountsNeighbours) {
   std::mt19937_64 rng(4);
   const Space space = Plane();
