@@ -84,8 +84,8 @@ class CollisionContext {
   // infinity, so that a robot far from everything costs a few volume tests. Returns L with
   //   min(Clearance(q) / (1 + rel_err), cap) <= L <= min(Clearance(q), cap),
   // and L = 0 exactly when Clearance(q) = 0 (contact or out of bounds): a pair in contact has
-  // volumes at distance 0, which are never pruned. rel_err >= 0, cap > 0. Counts one distance
-  // query.
+  // volumes at distance 0, which are never pruned. With rel_err = 0 it is a threshold query:
+  // exactly min(Clearance(q), cap). rel_err >= 0, cap > 0. Counts one distance query.
   double ClearanceLowerBound(const Config& q, double rel_err, double cap);
 
   // Distance from a world point to the nearest obstacle (mesh surfaces, solid primitives; 0 on or

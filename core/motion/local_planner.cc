@@ -75,7 +75,7 @@ class EdgeCheck {
   EdgeCheck(const Space& space, const std::vector<int>& body_component,
             const std::vector<double>& body_radius, CollisionContext& context, const Config& from,
             const Config& to, const CancelToken* cancel, const ClearanceBound* bound = nullptr,
-            std::atomic<int64_t>* bound_total = nullptr, double rel_err = 0)
+            std::atomic<int64_t>* bound_total = nullptr, double rel_err = 0, bool threshold = false)
       : space_(space),
         body_component_(body_component),
         body_radius_(body_radius),
@@ -85,7 +85,8 @@ class EdgeCheck {
         cancel_(cancel),
         bound_(bound),
         bound_total_(bound_total),
-        rel_err_(rel_err) {}
+        rel_err_(rel_err),
+        threshold_(threshold) {}
   ~EdgeCheck() {
     if (bound_total_ != nullptr) *bound_total_ += bound_queries_;
   }
@@ -106,12 +107,14 @@ class EdgeCheck {
       const double lower = bound_->LowerBound(q);
       if (lower > 0) return Bounded{.t = t, .clearance = lower, .exact = false};
     }
-    if (rel_err_ > 0 && whole_bound_ > 0) {
-      // FCL's early stop: 0 only in contact, so a 0 is exact. Past the cap a sample certifies
-      // the whole motion on its own, so nothing beyond it is worth measuring.
+    if ((rel_err_ > 0 || threshold_) && whole_bound_ > 0) {
+      // Past the cap a sample certifies the whole motion on its own (either way from t), so
+      // nothing beyond it is worth measuring. Without an early stop a value below the cap is
+      // exact; with one, only a 0 (contact) is.
       const double cap = kCapMargin * whole_bound_ * std::max(t, 1 - t);
       const double lower = context_.ClearanceLowerBound(q, rel_err_, cap);
-      return Bounded{.t = t, .clearance = lower, .exact = lower <= 0};
+      return Bounded{
+          .t = t, .clearance = lower, .exact = lower <= 0 || (rel_err_ == 0 && lower < cap)};
     }
     return Bounded{.t = t, .clearance = context_.Clearance(q), .exact = true};
   }
@@ -299,6 +302,7 @@ class EdgeCheck {
   const ClearanceBound* bound_;
   std::atomic<int64_t>* bound_total_;
   const double rel_err_;
+  const bool threshold_;
   double whole_bound_ = 0;  // the motion bound of the whole edge (Advance)
   // A sample with the motion bound of the whole edge, times max(t, 1 - t), as clearance covers
   // it alone with advancement's margin (0.999) to spare.
@@ -399,7 +403,7 @@ EdgeReport LocalPlanner::CheckEdge(const EdgeCheckRequest& request) const {
   if (request.proof != EdgeProof::kProfile) {
     EdgeCheck advance(s, impl_->body_component, impl_->body_radius, context, from, to,
                       request.cancel, options_.clearance_bound.get(), &impl_->bound_queries,
-                      options_.certificate_rel_err);
+                      options_.certificate_rel_err, options_.certificate_threshold);
     const EdgeCheck::Advanced advanced = advance.Advance(segments);
     if (advanced.invalid_at >= 0) return invalid(advanced.invalid_at);
     if (advanced.certified) {

@@ -47,6 +47,12 @@ struct LocalPlannerOptions {
   // clearance that would certify the whole motion from the sample): a bound at least
   // 1 / (1 + rel) of the exact distance, found with fewer triangle pairs. 0: exact distances.
   double certificate_rel_err = 0;
+  // Certificates ask FCL for the distance only up to the clearance that would certify the whole
+  // rest of the motion from the sample (a threshold query: FCL prunes everything farther from
+  // the start instead of from its first triangle pair). Below the threshold the answer is exact;
+  // at it, the sample certifies the motion on its own, so the certificate takes exactly the
+  // steps and queries exact distances would. False: unbounded exact distances.
+  bool certificate_threshold = true;
 };
 
 // The clearance bound of a world (a distance field sampled on `threads` threads, 0: all cores,

@@ -87,6 +87,8 @@ struct Problem {
   std::unique_ptr<LocalPlanner> bound_planner;
   // Planners whose certificates take FCL's early-stopped distance (certificate_rel_err).
   std::map<double, std::unique_ptr<LocalPlanner>> rel_planners;
+  // Certificates on unbounded exact distances (certificate_threshold off).
+  std::unique_ptr<LocalPlanner> unbounded_planner;
   double resolution = 0.01;
   std::vector<InputPath> inputs;
   std::vector<double> input_lengths;
@@ -111,6 +113,7 @@ struct Method {
   bool ompl = false;             // counts towards "best certified OMPL"
   bool clearance_bound = false;  // runs on Problem::bound_planner
   double rel_err = 0;            // > 0: runs on Problem::rel_planners[rel_err]
+  bool unbounded = false;        // runs on Problem::unbounded_planner
   // OMPL's pipeline as OMPL ships it (its DiscreteMotionValidator): the name of the certified
   // OMPL method that runs the same pipeline on our checker; empty for every other method.
   std::string shipped_twin;
@@ -209,6 +212,7 @@ Run RunOnce(const Method& m, const Problem& p, double k) {
   Run r;
   const LocalPlanner& planner = m.clearance_bound ? *p.bound_planner
                                 : m.rel_err > 0   ? *p.rel_planners.at(m.rel_err)
+                                : m.unbounded     ? *p.unbounded_planner
                                                   : *p.planner;
   CountingChecker counter(planner);
   const int64_t cc0 = planner.total_collision_checks();
@@ -286,6 +290,11 @@ std::vector<Method> Methods(const Problem& p, bool inverse_clearance_pair, uint6
       HgraphMethod("hgraph-clearance-bound", "hgraph defaults + --clearance-bound", {}, {});
   bounded.clearance_bound = true;
   m.push_back(std::move(bounded));
+  // The defaults with certificates on unbounded distances: what the threshold queries gain.
+  Method unbounded = HgraphMethod("hgraph-unbounded-certificates",
+                                  "hgraph defaults, certificates without threshold", {}, {});
+  unbounded.unbounded = true;
+  m.push_back(std::move(unbounded));
   // The defaults with certificates on FCL's early-stopped distance: what each error gains.
   for (double rel : kCertificateRelErrs) {
     std::ostringstream name;
@@ -381,6 +390,8 @@ Problem LoadProblem(const std::string& name, const std::string& file, const fs::
       std::make_unique<LocalPlanner>(p.world, LocalPlannerOptions{.resolution = p.resolution});
   p.bound_planner = std::make_unique<LocalPlanner>(
       p.world, LocalPlannerOptions{.resolution = p.resolution, .clearance_bound = bound});
+  p.unbounded_planner = std::make_unique<LocalPlanner>(
+      p.world, LocalPlannerOptions{.resolution = p.resolution, .certificate_threshold = false});
   for (double rel : kCertificateRelErrs) {
     p.rel_planners[rel] = std::make_unique<LocalPlanner>(
         p.world, LocalPlannerOptions{.resolution = p.resolution, .certificate_rel_err = rel});
