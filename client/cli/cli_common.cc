@@ -226,7 +226,7 @@ void PrintMergeTable(const MergeResult& r) {
   }
   if (!r.quality.has_clearance) {
     std::printf("  merged: %s, clearance not profiled (merge --report-clearance profiles it)\n",
-                CheckModeName(r.check_mode));
+                r.check_mode == CheckMode::kSampled ? "checked at its samples" : "certified");
   }
   std::printf("measure %s (%s variant): objective %s", MeasureTypeName(r.measure.type),
               VariantName(r.variant), Cell(r.objective, 0).c_str());
