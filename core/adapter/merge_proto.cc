@@ -383,8 +383,8 @@ MergeResult MergeResultFromProto(const v1::MergeResult& proto) {
   result.variant = VariantFromProto(proto.variant());
   // Either field saying sampled makes the result sampled; a server older than both certified
   // every merged path.
-  const bool sampled = proto.check_mode() == v1::CHECK_MODE_SAMPLED ||
-                       (proto.has_certified() && !proto.certified());
+  const bool sampled =
+      proto.check_mode() == v1::CHECK_MODE_SAMPLED || (proto.has_certified() && !proto.certified());
   result.check_mode = sampled ? CheckMode::kSampled : CheckMode::kCertified;
   result.best_input = proto.best_input();
   result.objective = proto.objective();

@@ -233,8 +233,7 @@ class HybridizationSession {
   // Checks the edges of `path` that lack what FinishProof asks (a polished path's new pieces);
   // whether every one of them may still be used.
   bool FinishHolds(const SearchResult& path, const Measure& measure,
-                   const ProgressCallback& progress, const CancelToken& cancel,
-                   int64_t* rechecked);
+                   const ProgressCallback& progress, const CancelToken& cancel, int64_t* rechecked);
   // Before a lazy search under `measure`: the node clearances and ceilings its bounds use.
   void PrepareBounds(const Measure& measure, const CancelToken& cancel, MergeResult* result);
   // Checks the edges of a path found that lack what `finish` asks (a certificate, a profile, or

@@ -35,7 +35,7 @@ bool SearchView::Usable(const EdgeReport& report) const {
 bool SearchView::Exact(int e) const {
   const EdgeReport& report = graph_.edge(e).report;
   return !Usable(report) || (report.state == EdgeState::kValid &&
-                              (!measure_.needs_clearance() || report.has_clearance));
+                             (!measure_.needs_clearance() || report.has_clearance));
 }
 
 SearchEdge SearchView::Look(int e) {

@@ -41,8 +41,8 @@ bool MayTake(const EdgeReport& report, double safety, bool lazy, bool sampled) {
 // (a merge profiles its output's edges at the end, which would find anything a sampled check
 // missed); a certificate holds for every stretch of the motion, a profile does not map onto one.
 // With `sampled` a piece of a motion without a certificate is unchecked (ShortcutRequest::sampled).
-EdgeReport Piece(const Space& space, const EdgeReport& whole, const Config& from,
-                 const Config& to, bool sampled) {
+EdgeReport Piece(const Space& space, const EdgeReport& whole, const Config& from, const Config& to,
+                 bool sampled) {
   const bool certified = whole.certified && !whole.has_clearance;
   return EdgeReport{.state = sampled && !certified ? EdgeState::kUnchecked : whole.state,
                     .length = space.Distance(from, to),
@@ -236,9 +236,8 @@ std::vector<EdgeReport> Shortening::JoinNeighbours(const std::vector<size_t>& tr
     if (!request_.known || ids_[j - 1] < 0 || ids_[j + 1] < 0) continue;
     const EdgeReport* known = request_.known(ids_[j - 1], ids_[j + 1]);
     // Taken when it settles the question: free, or not free whatever the safety.
-    if (known == nullptr ||
-        (!MayTake(*known) && known->state != EdgeState::kInvalid &&
-         (request_.sampled ? known->usable_at_samples() : known->usable()))) {
+    if (known == nullptr || (!MayTake(*known) && known->state != EdgeState::kInvalid &&
+                             (request_.sampled ? known->usable_at_samples() : known->usable()))) {
       continue;
     }
     joined[k] = *known;

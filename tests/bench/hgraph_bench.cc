@@ -659,10 +659,9 @@ std::string Markdown(const std::vector<SceneResult>& scenes, const std::string& 
 // Two panels, one group of bars per scene: each length-method's length and time relative to the
 // best certified OMPL pipeline (1 = equal), on a log2 scale around 1.
 std::string Svg(const std::vector<SceneResult>& scenes) {
-  const std::vector<std::string> colors = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728",
-                                           "#9467bd", "#8c564b", "#e377c2", "#7f7f7f",
-                                           "#bcbd22", "#17becf", "#aec7e8", "#ffbb78",
-                                           "#98df8a"};
+  const std::vector<std::string> colors = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd",
+                                           "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22", "#17becf",
+                                           "#aec7e8", "#ffbb78", "#98df8a"};
   // The length methods; the inverse-clearance pair is not compared.
   const int kMethods = static_cast<int>(colors.size());
   const double bar_w = 20, group_w = bar_w * kMethods + 20, left = 60, panel_h = 220, top = 40,

@@ -154,7 +154,7 @@ TEST_F(MergeTest, SampledMergeChecksSamplesOnlyAndSaysSo) {
   for (const MergeOptions& options :
        {MergeOptions{.check_mode = CheckMode::kSampled},
         MergeOptions{.candidates = {.variant = Variant::kAllPairs},
-                     .check_mode = CheckMode::kSampled},
+        .check_mode = CheckMode::kSampled},
         MergeOptions{.check_mode = CheckMode::kSampled, .optimize_restarts = 2}}) {
     SCOPED_TRACE(std::string(VariantName(options.candidates.variant)) + ", restarts " +
                  std::to_string(options.optimize_restarts));
@@ -360,8 +360,8 @@ TEST(MergeCertifiedTest, GrazingMotionsNeverReachTheOutput) {
   }
   // A sampled merge may take the grazing motions (valid at their samples): its path passes the
   // sampled check, and with more motions to use its H-Graph optimum is never longer.
-  const MergeResult sampled = Merge(
-      planner, MergeRequest{.paths = inputs, .options = {.check_mode = CheckMode::kSampled}});
+  const MergeResult sampled =
+      Merge(planner, MergeRequest{.paths = inputs, .options = {.check_mode = CheckMode::kSampled}});
   EXPECT_EQ(sampled.check_mode, CheckMode::kSampled);
   EXPECT_EQ(sampled.stats.distance_queries, 0);
   const InputReport check =
