@@ -447,9 +447,9 @@ MergeResult HybridizationSession::Query(const MeasureSpec& spec, const ProgressC
   unprofiled_result_.clear();
   result.timing.check_ms += MsSince(phase);
 
-  // The optimum is certified first (with CheckMode::kSampled, checked at its samples); the profiles, which only the report needs under a measure
-  // that does not search by clearance, are computed for the final path when it asks for them
-  // (MergeOptions::report_clearance).
+  // The optimum is certified first (with CheckMode::kSampled, checked at its samples); the
+  // profiles, which only the report needs under a measure that does not search by clearance, are
+  // computed for the final path when it asks for them (MergeOptions::report_clearance).
   SearchResult best = SearchBest(*measure, FinishProof(*measure), progress, cancel, &result,
                                  &rechecked);
   result.hgraph_objective = measure->Objective(EvaluateEdges(graph_, best.edges, spec.k));
