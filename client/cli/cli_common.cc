@@ -219,9 +219,14 @@ void PrintMergeTable(const MergeResult& r) {
         "  * not every edge checked (lazy evaluation): length only; --report-inputs "
         "checks them all\n");
   }
-  if (!r.quality.has_clearance) {
+  if (r.check_mode == CheckMode::kSampled) {
     std::printf(
-        "  merged: certified, clearance not profiled (merge --report-clearance profiles it)\n");
+        "  merged: NOT certified: its motions were checked at their samples only (--check "
+        "sampled), a collision between two samples may be missed\n");
+  }
+  if (!r.quality.has_clearance) {
+    std::printf("  merged: %s, clearance not profiled (merge --report-clearance profiles it)\n",
+                r.check_mode == CheckMode::kSampled ? "checked at its samples" : "certified");
   }
   std::printf("measure %s (%s variant): objective %s", MeasureTypeName(r.measure.type),
               VariantName(r.variant), Cell(r.objective, 0).c_str());

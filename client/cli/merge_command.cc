@@ -37,6 +37,7 @@ struct MergeFlags {
   std::string variant = "edit-distance";
   MeasureFlags measure;
   std::string evaluation = "lazy";
+  std::string check = "certified";
   bool report_inputs = false;
   bool report_clearance = false;
   bool partial_shortcuts = false;
@@ -66,6 +67,7 @@ v1::MergePathsRequest BuildRequest(const MergeFlags& f, const v1::Scene& scene,
     options->set_evaluation(ParseEvaluation(f.evaluation, "--evaluation") == Evaluation::kEager
                                 ? v1::EVALUATION_EAGER
                                 : v1::EVALUATION_LAZY);
+    options->set_check_mode(CheckModeToProto(ParseCheckMode(f.check, "--check")));
     options->set_report_inputs(f.report_inputs);
     options->set_report_clearance(f.report_clearance);
     options->set_partial_shortcuts(f.partial_shortcuts);
@@ -147,9 +149,10 @@ int RunMerge(const MergeFlags& f, const MergeRunner& run, std::optional<LoadedSc
   }
   if (!response.complete) {
     std::printf(
-        "deadline passed during the post-optimization: the best path so far, certified, %zu "
+        "deadline passed during the post-optimization: the best path so far, %s, %zu "
         "waypoints, %s objective %.6g (no report)\n",
-        result.path.waypoints.size(), MeasureTypeName(result.measure.type), result.objective);
+        CheckModeName(result.check_mode), result.path.waypoints.size(),
+        MeasureTypeName(result.measure.type), result.objective);
     return kExitOk;
   }
   PrintMergeTable(result);
@@ -204,6 +207,9 @@ int RunRemote(const MergeFlags& f, const RemoteOptions& remote) {
         if (!best) {
           best.emplace();
           *best->mutable_measure() = r.measure();
+          const CheckMode mode = CheckModeFromProto(r.options().check_mode());
+          best->set_check_mode(CheckModeToProto(mode));
+          best->set_certified(mode == CheckMode::kCertified);
         }
         *best->mutable_path() = p.path();
         best->set_objective(p.objective());
@@ -286,6 +292,12 @@ Subcommand AddMergeCommand(CLI::App& parent) {
   app->add_option("--evaluation", f.evaluation,
                   "lazy: check only the edges of the paths the search would take; eager: check "
                   "every candidate first")
+      ->capture_default_str();
+  app->add_option("--check", f.check,
+                  "certified: every motion the merged path takes proven free between its "
+                  "samples; sampled: checked at the resolution's samples only, as OMPL's "
+                  "DiscreteMotionValidator (cheaper, may miss a collision between two samples; "
+                  "the result says certified false)")
       ->capture_default_str();
   f.options.Add<double>(
       app, "--optimize-ms",

@@ -74,6 +74,22 @@ v1::Variant VariantToProto(Variant variant) {
   return v1::VARIANT_UNSPECIFIED;
 }
 
+CheckMode CheckModeFromProto(v1::CheckMode mode) {
+  switch (mode) {
+    case v1::CHECK_MODE_UNSPECIFIED:
+    case v1::CHECK_MODE_CERTIFIED: return CheckMode::kCertified;
+    case v1::CHECK_MODE_SAMPLED: return CheckMode::kSampled;
+    default:
+      throw InputError("options.check_mode",
+                       "unknown check mode " + std::to_string(static_cast<int>(mode)) +
+                           " (expected CHECK_MODE_CERTIFIED or CHECK_MODE_SAMPLED)");
+  }
+}
+
+v1::CheckMode CheckModeToProto(CheckMode mode) {
+  return mode == CheckMode::kSampled ? v1::CHECK_MODE_SAMPLED : v1::CHECK_MODE_CERTIFIED;
+}
+
 v1::OptimizeStop OptimizeStopToProto(OptimizeStop stop) {
   switch (stop) {
     case OptimizeStop::kOff: return v1::OPTIMIZE_STOP_OFF;
@@ -151,6 +167,7 @@ MergeOptions MergeOptionsFromProto(const v1::MergeOptions& proto) {
       throw InputError("options.evaluation",
                        "unknown evaluation " + std::to_string(proto.evaluation()));
   }
+  options.check_mode = CheckModeFromProto(proto.check_mode());
   options.report_inputs = proto.report_inputs();
   options.report_clearance = proto.report_clearance();
   options.partial_shortcuts = proto.partial_shortcuts();
@@ -297,6 +314,8 @@ v1::MergeResult MergeResultToProto(const MergeResult& result) {
   for (double f : result.source_fraction) proto.add_source_fraction(f);
   *proto.mutable_measure() = MeasureToProto(result.measure);
   proto.set_variant(VariantToProto(result.variant));
+  proto.set_check_mode(CheckModeToProto(result.check_mode));
+  proto.set_certified(result.check_mode == CheckMode::kCertified);
   proto.set_best_input(result.best_input);
   proto.set_objective(result.objective);
   proto.set_best_input_objective(result.best_input_objective);
@@ -362,6 +381,11 @@ MergeResult MergeResultFromProto(const v1::MergeResult& proto) {
   result.source_fraction.assign(proto.source_fraction().begin(), proto.source_fraction().end());
   result.measure = MeasureFromProto(proto.measure());
   result.variant = VariantFromProto(proto.variant());
+  // Either field saying sampled makes the result sampled; a server older than both certified
+  // every merged path.
+  const bool sampled =
+      proto.check_mode() == v1::CHECK_MODE_SAMPLED || (proto.has_certified() && !proto.certified());
+  result.check_mode = sampled ? CheckMode::kSampled : CheckMode::kCertified;
   result.best_input = proto.best_input();
   result.objective = proto.objective();
   result.best_input_objective = proto.best_input_objective();

@@ -14,6 +14,9 @@ v1::Measure MeasureToProto(const MeasureSpec& spec);
 
 Variant VariantFromProto(v1::Variant variant);
 v1::Variant VariantToProto(Variant variant);
+// Unspecified is certified; an unknown value is an InputError naming options.check_mode.
+CheckMode CheckModeFromProto(v1::CheckMode mode);
+v1::CheckMode CheckModeToProto(CheckMode mode);
 v1::OptimizeStop OptimizeStopToProto(OptimizeStop stop);
 OptimizeStop OptimizeStopFromProto(v1::OptimizeStop stop);
 

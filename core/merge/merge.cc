@@ -241,7 +241,7 @@ SearchResult HybridizationSession::SearchBest(const Measure& measure, EdgeProof 
                                               const CancelToken& cancel, MergeResult* result,
                                               int64_t* rechecked) {
   PrepareBounds(measure, cancel, result);
-  SearchView view(graph_, evidence_, measure, Evaluator());
+  SearchView view(graph_, evidence_, measure, Evaluator(), options_.check_mode);
   std::vector<double> cost_to_go;
   if (measure.cost_per_distance() > 0) {
     cost_to_go.resize(graph_.num_nodes());
@@ -284,10 +284,32 @@ SearchResult HybridizationSession::SearchBest(const Measure& measure, EdgeProof 
     bool still_valid = true;
     for (int e : rechecked_edges) {
       const EdgeReport& report = graph_.edge(e).report;
-      still_valid = still_valid && report.state == EdgeState::kValid && report.usable();
+      still_valid = still_valid && report.state == EdgeState::kValid && Usable(report);
     }
     if (still_valid) return best;
   }
+}
+
+EdgeProof HybridizationSession::FinishProof(const Measure& measure) const {
+  if (measure.needs_clearance()) return EdgeProof::kProfile;
+  return options_.check_mode == CheckMode::kSampled ? EdgeProof::kSamples
+                                                    : EdgeProof::kCertificate;
+}
+
+bool HybridizationSession::Usable(const EdgeReport& report) const {
+  return options_.check_mode == CheckMode::kSampled ? report.usable_at_samples()
+                                                    : report.usable();
+}
+
+bool HybridizationSession::FinishHolds(const SearchResult& path, const Measure& measure,
+                                       const ProgressCallback& progress,
+                                       const CancelToken& cancel, int64_t* rechecked) {
+  bool holds = true;
+  for (int e : FinishPath(path, FinishProof(measure), progress, cancel, rechecked)) {
+    const EdgeReport& report = graph_.edge(e).report;
+    holds = holds && report.state == EdgeState::kValid && Usable(report);
+  }
+  return holds;
 }
 
 void HybridizationSession::PrepareBounds(const Measure& measure, const CancelToken& cancel,
@@ -307,9 +329,10 @@ std::vector<int> HybridizationSession::FinishPath(const SearchResult& best, Edge
   std::vector<int> recheck;
   for (int e : best.edges) {
     const EdgeReport& report = graph_.edge(e).report;
-    if (finish == EdgeProof::kProfile ? !report.has_clearance : !report.certified) {
-      recheck.push_back(e);
-    }
+    const bool lacks = finish == EdgeProof::kProfile   ? !report.has_clearance
+                       : finish == EdgeProof::kSamples ? report.state == EdgeState::kUnchecked
+                                                       : !report.certified;
+    if (lacks) recheck.push_back(e);
   }
   if (finish == EdgeProof::kProfile) Evaluator().ProbeProfileGrids(recheck, cancel);
   Evaluator().CheckEdges(recheck, finish, "evaluate", progress, cancel, rechecked);
@@ -398,6 +421,7 @@ MergeResult HybridizationSession::Query(const MeasureSpec& spec, const ProgressC
   MergeResult result;
   result.measure = spec;
   result.variant = options_.candidates.variant;
+  result.check_mode = options_.check_mode;
   // The first query reports the build's timing; every query its own work, with what no query
   // has reported yet (the build's, an eager AddPaths'), and the H-Graph's shape (CountWork).
   const bool first = std::exchange(first_query_, false);
@@ -428,12 +452,11 @@ MergeResult HybridizationSession::Query(const MeasureSpec& spec, const ProgressC
   unprofiled_result_.clear();
   result.timing.check_ms += MsSince(phase);
 
-  // The optimum is certified first; the profiles, which only the report needs under a measure
-  // that does not search by clearance, are computed for the final path when it asks for them
-  // (MergeOptions::report_clearance).
-  SearchResult best =
-      SearchBest(*measure, needs_clearance ? EdgeProof::kProfile : EdgeProof::kCertificate,
-                 progress, cancel, &result, &rechecked);
+  // The optimum is certified first (with CheckMode::kSampled, checked at its samples); the
+  // profiles, which only the report needs under a measure that does not search by clearance, are
+  // computed for the final path when it asks for them (MergeOptions::report_clearance).
+  SearchResult best = SearchBest(*measure, FinishProof(*measure), progress, cancel, &result,
+                                 &rechecked);
   result.hgraph_objective = measure->Objective(EvaluateEdges(graph_, best.edges, spec.k));
   if (PostOptimizer::Applies(options_, *measure)) {
     best = PostOptimizer(*this, *measure, progress, cancel, &result, &rechecked, optimize_until)

@@ -42,6 +42,15 @@ Evaluation ParseEvaluation(const std::string& name, const std::string& field);
 struct MergeOptions {
   CandidateOptions candidates;
   Evaluation evaluation = Evaluation::kLazy;
+  // What a motion must pass for the merged path to take it (see merge.proto
+  // MergeOptions.check_mode). kCertified: proven free between its samples (the clearance
+  // certificate of core/motion/local_planner.h). kSampled: the collision test at the
+  // resolution's samples only, as OMPL's DiscreteMotionValidator checks: no distance query for a
+  // measure that needs no clearance, and a result that may graze an obstacle between two samples
+  // (MergeResult::check_mode says so). The measures of clearance still profile the motions they
+  // take (their values are clearances), and take a profile whose certificate fails where its
+  // samples passed; so do report_inputs, report_clearance and eager evaluation's input profiles.
+  CheckMode check_mode = CheckMode::kCertified;
   // Check every input edge with its clearance profile so that every input report is complete
   // (InputReport::checked). Always so with kEager. Lazy evaluation otherwise reports what its
   // search checked.
@@ -134,6 +143,9 @@ struct MergeResult {
   std::vector<double> source_fraction;  // along edge (source_index, +1); 0 at input waypoints
   MeasureSpec measure;
   Variant variant = Variant::kEditDistance;
+  // The merge's MergeOptions::check_mode: with kCertified every motion of `path` is proven free;
+  // with kSampled it passed the collision test at its samples only (not certified).
+  CheckMode check_mode = CheckMode::kCertified;
   int best_input = -1;
   double objective = 0;
   double best_input_objective = 0;
@@ -204,16 +216,28 @@ class HybridizationSession {
   // invalid input edges, the resolved candidate parameters and the alignments run.
   void FillShape(int nodes, int edges, MergeStats* stats) const;
   // The best path under `measure` with every edge checked, and then certified (`finish`
-  // kCertificate) or also profiled (kClearance, so that every measure can be reported). The
+  // kCertificate) or also profiled (kClearance, so that every measure can be reported), or with
+  // kSamples left at the samples its lazy search checked (CheckMode::kSampled). The
   // certificate can find a collision a sampled check missed, or fail where a motion grazes an
   // obstacle; then the search runs again. Adds to the result's stats and timing.
   SearchResult SearchBest(const Measure& measure, EdgeProof finish,
                           const ProgressCallback& progress, const CancelToken& cancel,
                           MergeResult* result, int64_t* rechecked);
+  // What the edges of a path found under `measure` must establish before the path stands: a
+  // profile for a measure of clearance, else a certificate, or with CheckMode::kSampled only their
+  // samples.
+  EdgeProof FinishProof(const Measure& measure) const;
+  // Whether a path may use the motion under the merge's check mode (EdgeReport::usable, or
+  // usable_at_samples for kSampled).
+  bool Usable(const EdgeReport& report) const;
+  // Checks the edges of `path` that lack what FinishProof asks (a polished path's new pieces);
+  // whether every one of them may still be used.
+  bool FinishHolds(const SearchResult& path, const Measure& measure,
+                   const ProgressCallback& progress, const CancelToken& cancel, int64_t* rechecked);
   // Before a lazy search under `measure`: the node clearances and ceilings its bounds use.
   void PrepareBounds(const Measure& measure, const CancelToken& cancel, MergeResult* result);
-  // Checks the edges of a path found that lack what `finish` asks (a certificate, or a profile);
-  // returns them (the path stands if they are still valid).
+  // Checks the edges of a path found that lack what `finish` asks (a certificate, a profile, or
+  // with kSamples a check at all); returns them (the path stands if they are still valid).
   std::vector<int> FinishPath(const SearchResult& best, EdgeProof finish,
                               const ProgressCallback& progress, const CancelToken& cancel,
                               int64_t* rechecked);

@@ -98,7 +98,8 @@ bool PostOptimizer::GoOn() {
 
 void PostOptimizer::Stream() {
   if (!progress_) return;
-  // Every path here is certified: the H-Graph's optimum, each round's search and each polish.
+  // Every path here is certified (with CheckMode::kSampled, checked at its samples): the
+  // H-Graph's optimum, each round's search and each polish.
   std::shared_ptr<InputPath> path;
   if (session_.options_.progress_paths) {
     path = std::make_shared<InputPath>(InputPath{.name = "merged"});
@@ -129,9 +130,8 @@ bool PostOptimizer::Take(SearchResult next) {
 SearchResult PostOptimizer::Search() {
   // Under safe length the search may take an edge whose clearance floor proves the safety
   // without a profile; the profile makes the objective known.
-  return session_.SearchBest(
-      measure_, measure_.needs_clearance() ? EdgeProof::kProfile : EdgeProof::kCertificate,
-      progress_, cancel_, result_, rechecked_);
+  return session_.SearchBest(measure_, session_.FinishProof(measure_), progress_, cancel_, result_,
+                             rechecked_);
 }
 
 void PostOptimizer::Keep(int a, int b, const EdgeReport& report) {
@@ -153,6 +153,7 @@ ShortcutResult PostOptimizer::Shorten(const std::vector<int>& ids,
                           .corners_only = polishing,
                           .partial = session_.options_.partial_shortcuts ? kPartialShare : 0.0,
                           .lazy = lazy,
+                          .sampled = session_.options_.check_mode == CheckMode::kSampled,
                           .threads = ResolveThreads(session_.options_.threads),
                           .known = [this](int a, int b) -> const EdgeReport* {
                             const int e = graph_.FindEdge(a, b);
@@ -213,12 +214,18 @@ void PostOptimizer::ShortenTheBest() {
     if (shortcut.accepted == 0) return false;
     SearchResult next;
     if (polishing) {
-      // The polished path itself: every edge proven free (the cuts) or a piece of one.
+      // The polished path itself: every edge proven free (the cuts) or a piece of one. A sampled
+      // merge's pieces of motions checked at their samples are checked at their own (a search
+      // instead, if one is in collision).
       next.found = true;
       for (int id : shortcut.ids) {
         if (!next.nodes.empty() && next.nodes.back() == id) continue;
         if (!next.nodes.empty()) next.edges.push_back(graph_.FindEdge(next.nodes.back(), id));
         next.nodes.push_back(id);
+      }
+      if (session_.options_.check_mode == CheckMode::kSampled &&
+          !session_.FinishHolds(next, measure_, progress_, cancel_, rechecked_)) {
+        next = Search();
       }
     } else {
       next = Search();

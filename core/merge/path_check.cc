@@ -27,6 +27,14 @@ const char* CheckModeName(CheckMode mode) {
   return mode == CheckMode::kCertified ? "certified" : "sampled";
 }
 
+CheckMode ParseCheckMode(const std::string& name, const std::string& field) {
+  for (CheckMode mode : {CheckMode::kCertified, CheckMode::kSampled}) {
+    if (name == CheckModeName(mode)) return mode;
+  }
+  throw InputError(field,
+                   "unknown check mode '" + ClientText(name) + "' (expected certified or sampled)");
+}
+
 const char* InvalidCauseName(InvalidCause cause) {
   switch (cause) {
     case InvalidCause::kNone: return "none";

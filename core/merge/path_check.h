@@ -52,6 +52,8 @@ enum class CheckMode {
 
 // "certified" or "sampled".
 const char* CheckModeName(CheckMode mode);
+// Parses the names above; throws InputError naming `field` otherwise.
+CheckMode ParseCheckMode(const std::string& name, const std::string& field);
 // "collision", "out of bounds" or "none".
 const char* InvalidCauseName(InvalidCause cause);
 

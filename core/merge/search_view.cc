@@ -5,11 +5,12 @@
 namespace hgraph {
 
 SearchView::SearchView(const HGraph& graph, const EdgeEvidence& evidence, const Measure& measure,
-                       LazyEdgeEvaluator evaluator)
+                       LazyEdgeEvaluator evaluator, CheckMode check_mode)
     : graph_(graph),
       evidence_(evidence),
       measure_(measure),
       evaluator_(evaluator),
+      check_mode_(check_mode),
       seen_(graph.num_edges()),
       seen_now_(graph.num_edges(), 0) {}
 
@@ -27,16 +28,20 @@ void SearchView::Forget(const std::vector<int>& edges) {
   for (int e : edges) seen_now_[e] = 0;
 }
 
+bool SearchView::Usable(const EdgeReport& report) const {
+  return check_mode_ == CheckMode::kSampled ? report.usable_at_samples() : report.usable();
+}
+
 bool SearchView::Exact(int e) const {
   const EdgeReport& report = graph_.edge(e).report;
-  return !report.usable() || (report.state == EdgeState::kValid &&
-                              (!measure_.needs_clearance() || report.has_clearance));
+  return !Usable(report) || (report.state == EdgeState::kValid &&
+                             (!measure_.needs_clearance() || report.has_clearance));
 }
 
 SearchEdge SearchView::Look(int e) {
   const EdgeReport& report = graph_.edge(e).report;
   const double length = evidence_.edge_length[e];
-  if (!report.usable()) {
+  if (!Usable(report)) {
     return SearchEdge{.value = std::numeric_limits<double>::quiet_NaN(), .length = length};
   }
   if (Exact(e)) {

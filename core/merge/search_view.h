@@ -9,6 +9,7 @@
 #include "core/measure/measure.h"
 #include "core/merge/edge_evaluator.h"
 #include "core/merge/evidence.h"
+#include "core/merge/path_check.h"
 #include "core/search/search.h"
 
 namespace hgraph {
@@ -19,8 +20,10 @@ namespace hgraph {
 // it hands out point to it); not thread safe.
 class SearchView {
  public:
+  // With CheckMode::kSampled a profile without a certificate is usable
+  // (EdgeReport::usable_at_samples).
   SearchView(const HGraph& graph, const EdgeEvidence& evidence, const Measure& measure,
-             LazyEdgeEvaluator evaluator);
+             LazyEdgeEvaluator evaluator, CheckMode check_mode);
   SearchView(const SearchView&) = delete;
   SearchView& operator=(const SearchView&) = delete;
 
@@ -32,6 +35,7 @@ class SearchView {
   void Forget(const std::vector<int>& edges);
 
  private:
+  bool Usable(const EdgeReport& report) const;
   bool Exact(int e) const;
   SearchEdge Look(int e);
 
@@ -39,6 +43,7 @@ class SearchView {
   const EdgeEvidence& evidence_;
   const Measure& measure_;
   LazyEdgeEvaluator evaluator_;
+  CheckMode check_mode_;
   std::vector<SearchEdge> seen_;
   std::vector<char> seen_now_;
 };

@@ -17,8 +17,8 @@ namespace {
 // pairs and corners offer others. On the 21 kept benchmark problems (hgraph-bench seeds 1-3,
 // defaults, one thread) this took the post-optimization's cost from 613k to 576k (collision
 // checks + 10 x distance queries) and the merges' time by 8%, for a geometric mean of the length
-// ratios to OMPL of 0.9446 against 0.9443. With `lazy` (ShortcutRequest::lazy), at the samples
-// only.
+// ratios to OMPL of 0.9446 against 0.9443. With `lazy` (ShortcutRequest::lazy, or sampled), at
+// the samples only.
 EdgeReport Check(const MotionChecker& checker, const Config& a, const Config& b, double safety,
                  bool lazy) {
   return checker.CheckEdge(EdgeCheckRequest{.from = &a,
@@ -29,20 +29,24 @@ EdgeReport Check(const MotionChecker& checker, const Config& a, const Config& b,
 }
 
 // Whether a path may take the motion: proven free (and keeping `safety`), or with `lazy` valid at
-// its samples.
-bool MayTake(const EdgeReport& report, double safety, bool lazy) {
-  return report.state == EdgeState::kValid && (report.certified || lazy) && report.usable() &&
+// its samples; with `sampled` (ShortcutRequest::sampled) valid at its samples, also with a
+// profile whose certificate failed.
+bool MayTake(const EdgeReport& report, double safety, bool lazy, bool sampled) {
+  const bool usable = sampled ? report.usable_at_samples() : report.usable();
+  return report.state == EdgeState::kValid && (report.certified || lazy || sampled) && usable &&
          (safety <= 0 || (report.has_clearance && MinClearance(report) >= safety));
 }
 
 // The stretch of an accepted motion (`whole`) from `from` to `to`: it keeps the motion's verdict
 // (a merge profiles its output's edges at the end, which would find anything a sampled check
 // missed); a certificate holds for every stretch of the motion, a profile does not map onto one.
-EdgeReport Piece(const Space& space, const EdgeReport& whole, const Config& from,
-                 const Config& to) {
-  return EdgeReport{.state = whole.state,
+// With `sampled` a piece of a motion without a certificate is unchecked (ShortcutRequest::sampled).
+EdgeReport Piece(const Space& space, const EdgeReport& whole, const Config& from, const Config& to,
+                 bool sampled) {
+  const bool certified = whole.certified && !whole.has_clearance;
+  return EdgeReport{.state = sampled && !certified ? EdgeState::kUnchecked : whole.state,
                     .length = space.Distance(from, to),
-                    .certified = whole.certified && !whole.has_clearance};
+                    .certified = certified};
 }
 
 double PathLength(const std::vector<EdgeReport>& edges) {
@@ -110,10 +114,13 @@ class Shortening {
   };
 
   EdgeReport CheckMotion(const Config& a, const Config& b) const {
-    return Check(checker_, a, b, request_.safety, lazy_);
+    return Check(checker_, a, b, request_.safety, lazy_ || request_.sampled);
   }
   bool MayTake(const EdgeReport& report) const {
-    return hgraph::MayTake(report, request_.safety, lazy_);
+    return hgraph::MayTake(report, request_.safety, lazy_, request_.sampled);
+  }
+  EdgeReport PieceOf(const EdgeReport& whole, const Config& from, const Config& to) const {
+    return Piece(space_, whole, from, to, request_.sampled);
   }
   // The motions joining the neighbours of the waypoints `tried`: reports the caller knows where
   // they settle the question (from_caller), checks otherwise.
@@ -229,8 +236,8 @@ std::vector<EdgeReport> Shortening::JoinNeighbours(const std::vector<size_t>& tr
     if (!request_.known || ids_[j - 1] < 0 || ids_[j + 1] < 0) continue;
     const EdgeReport* known = request_.known(ids_[j - 1], ids_[j + 1]);
     // Taken when it settles the question: free, or not free whatever the safety.
-    if (known == nullptr ||
-        (!MayTake(*known) && known->state != EdgeState::kInvalid && known->usable())) {
+    if (known == nullptr || (!MayTake(*known) && known->state != EdgeState::kInvalid &&
+                             (request_.sampled ? known->usable_at_samples() : known->usable()))) {
       continue;
     }
     joined[k] = *known;
@@ -378,8 +385,8 @@ std::vector<size_t> Shortening::TakeFromBatch(const std::vector<Candidate>& batc
 
 void Shortening::Splice(Candidate& c) {
   // The cut edges' pieces up to a and from b.
-  EdgeReport head = Piece(space_, edges_[c.e0], q_[c.e0], c.a);
-  EdgeReport tail = Piece(space_, edges_[c.e1], c.b, q_[c.e1 + 1]);
+  EdgeReport head = PieceOf(edges_[c.e0], q_[c.e0], c.a);
+  EdgeReport tail = PieceOf(edges_[c.e1], c.b, q_[c.e1 + 1]);
   const auto keep = static_cast<std::ptrdiff_t>(c.e0 + 1);
   std::vector<Config> nq(q_.begin(), q_.begin() + keep);
   std::vector<int> ni(ids_.begin(), ids_.begin() + keep);
@@ -463,7 +470,7 @@ void Shortening::ApplyCuts(std::vector<Cut>& cuts) {
   // edge itself, or a piece of it.
   const auto add_edge = [&](size_t j, const Config& to) {
     const bool whole = !cuts[j - 1].free && !cuts[j].free;
-    ne.push_back(whole ? edges_[j - 1] : Piece(space_, edges_[j - 1], nq.back(), to));
+    ne.push_back(whole ? edges_[j - 1] : PieceOf(edges_[j - 1], nq.back(), to));
   };
   for (size_t j = 1; j + 1 < q_.size(); ++j) {
     out_.edges_checked += cuts[j].checks;

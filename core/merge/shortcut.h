@@ -3,7 +3,8 @@
 // anywhere along its edges, by the straight motion between them when the local planner proves
 // that motion free (EdgeCheckRequest::certify). OMPL's PathSimplifier does the same with a
 // sampled check; every motion accepted here carries a certificate, unless the caller asks for
-// sampled checks only (ShortcutRequest::lazy) and certifies what it keeps.
+// sampled checks only (ShortcutRequest::lazy) and certifies what it keeps, or takes motions
+// valid at their samples (ShortcutRequest::sampled, a sampled merge).
 #pragma once
 
 #include <cstdint>
@@ -53,12 +54,18 @@ struct ShortcutRequest {
   // certificate: for a path that a certified search over the H-Graph takes apart afterwards
   // (lazy), where most motions a shortcut takes are replaced by later ones. Not with safety.
   bool lazy = false;
+  // A path that needs its motions valid at their samples only (a merge with CheckMode::kSampled):
+  // motions are checked at their samples (with safety, profiled, and taken without a
+  // certificate), and a piece of a motion that is not certified enters the result unchecked
+  // (EdgeState::kUnchecked), since the samples of the whole motion are not the piece's own: the
+  // caller checks it at its samples before a path takes it.
+  bool sampled = false;
   // Threads that check a batch of shortcuts at once (0 = all cores). The result does not depend
   // on it: the batches are fixed, only their checks run in parallel.
   int threads = 1;
   // The report of the motion between the waypoints with ids a and b when the caller already
   // knows it (an H-Graph edge); nullptr when it does not. Only a report that is invalid, or
-  // valid and certified (lazy: valid), is taken instead of a check. May be empty.
+  // valid and certified (lazy, sampled: valid), is taken instead of a check. May be empty.
   std::function<const EdgeReport*(int a, int b)> known;
 };
 

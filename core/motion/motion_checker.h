@@ -42,6 +42,10 @@ struct EdgeReport {
   // (a motion that grazes an obstacle closer than the finest refinement can prove free is
   // refused, so that every merged path is certified).
   bool usable() const { return state != EdgeState::kInvalid && !(has_clearance && !certified); }
+  // Whether a path that takes motions valid at their samples (a sampled merge, OMPL's discrete
+  // motion validator) may use the motion: not found invalid. A profile without a certificate
+  // passed its samples, so it is usable here.
+  bool usable_at_samples() const { return state != EdgeState::kInvalid; }
 };
 
 // Default local-planner resolution: the longest step between two checked samples as a fraction

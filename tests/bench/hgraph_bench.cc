@@ -284,6 +284,11 @@ Method HgraphMethod(const std::string& name, const std::string& label, MeasureSp
 std::vector<Method> Methods(const Problem& p, bool inverse_clearance_pair, uint64_t seed) {
   std::vector<Method> m;
   m.push_back(HgraphMethod("hgraph-defaults", "hgraph defaults", {}, {}));
+  // The defaults with every motion checked at its samples only (`--check sampled`), as OMPL as
+  // shipped checks them: the comparison with it on equal footing. Its output is judged by
+  // CheckPaths like every other (certified, not certified, or in collision).
+  m.push_back(HgraphMethod("hgraph-sampled", "hgraph --check sampled", {},
+                           MergeOptions{.check_mode = CheckMode::kSampled}));
   // The defaults on a checker with the scene's clearance bound (`hgraph-server
   // --clearance-bound`): what the bound gains and costs.
   Method bounded =
@@ -466,6 +471,9 @@ struct SceneResult {
   // output (or, without certified twins, the shipped pipeline with the shorter output).
   int shipped = -1;
   double shipped_length_ratio = NAN, shipped_time_ratio = NAN;
+  // hgraph --check sampled against OMPL as shipped: both check samples only.
+  int sampled = -1;
+  double sampled_length_ratio = NAN, sampled_time_ratio = NAN;
 };
 
 int FindMethod(const SceneResult& s, const std::string& name) {
@@ -508,6 +516,11 @@ void Compare(SceneResult* s) {
     s->shipped_length_ratio = defaults.length / s->methods[s->shipped].length;
     s->shipped_time_ratio = defaults.ms / s->methods[s->shipped].ms;
   }
+  s->sampled = FindMethod(*s, "hgraph-sampled");
+  if (s->sampled >= 0 && s->shipped >= 0 && s->methods[s->sampled].runs_ok > 0) {
+    s->sampled_length_ratio = s->methods[s->sampled].length / s->methods[s->shipped].length;
+    s->sampled_time_ratio = s->methods[s->sampled].ms / s->methods[s->shipped].ms;
+  }
 }
 
 std::string Json(const std::vector<SceneResult>& scenes, const std::string& command, int runs) {
@@ -527,6 +540,8 @@ std::string Json(const std::vector<SceneResult>& scenes, const std::string& comm
       << (s.shipped >= 0 ? Quote(s.methods[s.shipped].method) : "null")
       << ", \"defaults_vs_shipped_length_ratio\": " << Num(s.shipped_length_ratio, 6)
       << ", \"defaults_vs_shipped_time_ratio\": " << Num(s.shipped_time_ratio, 6)
+      << ", \"sampled_vs_shipped_length_ratio\": " << Num(s.sampled_length_ratio, 6)
+      << ", \"sampled_vs_shipped_time_ratio\": " << Num(s.sampled_time_ratio, 6)
       << ",\n     \"methods\": [";
     for (size_t i = 0; i < s.methods.size(); ++i) {
       const Summary& m = s.methods[i];
@@ -587,6 +602,29 @@ void Headline(const std::vector<SceneResult>& scenes, std::ostringstream& o) {
   o << "| median | | | **" << Cell(Median(shipped_time), 3) << "** | | "
     << Cell(Median(best_time), 3) << " | | | | **" << Cell(Median(shipped_length), 4) << "** | "
     << Cell(Median(best_length), 4) << " |\n\n";
+  // Like for like: hgraph with samples only (--check sampled) against OMPL as shipped.
+  if (std::none_of(scenes.begin(), scenes.end(),
+                   [](const SceneResult& s) { return s.sampled >= 0; })) {
+    return;
+  }
+  o << "| scene | hgraph --check sampled ms | OMPL as shipped ms | **sampled / shipped time** | "
+       "sampled length (cert.) | shipped length (cert.) | **sampled / shipped length** "
+       "|\n|---|---|---|---|---|---|---|\n";
+  std::vector<double> sampled_time, sampled_length;
+  for (const SceneResult& s : scenes) {
+    if (s.sampled < 0) continue;
+    const Summary& m = s.methods[s.sampled];
+    const Summary* shipped = s.shipped >= 0 ? &s.methods[s.shipped] : nullptr;
+    o << "| " << s.name << " | " << Cell(m.ms, 4) << " | " << (shipped ? Cell(shipped->ms, 4) : "-")
+      << " | **" << Cell(s.sampled_time_ratio, 3) << "** | " << Cell(m.length, 5) << " ("
+      << Certified(m) << ") | "
+      << (shipped ? Cell(shipped->length, 5) + " (" + Certified(*shipped) + ")" : "-") << " | **"
+      << Cell(s.sampled_length_ratio, 4) << "** |\n";
+    if (!std::isnan(s.sampled_time_ratio)) sampled_time.push_back(s.sampled_time_ratio);
+    if (!std::isnan(s.sampled_length_ratio)) sampled_length.push_back(s.sampled_length_ratio);
+  }
+  o << "| median | | | **" << Cell(Median(sampled_time), 3) << "** | | | **"
+    << Cell(Median(sampled_length), 4) << "** |\n\n";
 }
 
 std::string Markdown(const std::vector<SceneResult>& scenes, const std::string& command, int runs) {
@@ -632,9 +670,9 @@ std::string Markdown(const std::vector<SceneResult>& scenes, const std::string& 
 // Two panels, one group of bars per scene: each length-method's length and time relative to the
 // best certified OMPL pipeline (1 = equal), on a log2 scale around 1.
 std::string Svg(const std::vector<SceneResult>& scenes) {
-  const std::vector<std::string> colors = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728",
-                                           "#9467bd", "#8c564b", "#e377c2", "#7f7f7f",
-                                           "#bcbd22", "#17becf", "#aec7e8", "#ffbb78"};
+  const std::vector<std::string> colors = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd",
+                                           "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22", "#17becf",
+                                           "#aec7e8", "#ffbb78", "#98df8a"};
   // The length methods; the inverse-clearance pair is not compared.
   const int kMethods = static_cast<int>(colors.size());
   const double bar_w = 20, group_w = bar_w * kMethods + 20, left = 60, panel_h = 220, top = 40,

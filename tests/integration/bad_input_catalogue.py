@@ -234,6 +234,7 @@ CASES = [
     ("optimize_restarts_negative", "merge", merge_req(optimize_restarts=-1), C.INVALID_ARGUMENT, "options.optimize_restarts"),
     ("optimize_restarts_huge", "merge", merge_req(optimize_restarts=2000000000), C.INVALID_ARGUMENT, "options.optimize_restarts"),
     ("evaluation_unknown", "merge", merge_req(evaluation=9), C.INVALID_ARGUMENT, "options.evaluation"),
+    ("check_mode_unknown", "merge", merge_req(check_mode=9), C.INVALID_ARGUMENT, "options.check_mode"),
     ("progress_interval_negative", "merge", dict(progress_interval_ms=-5), C.INVALID_ARGUMENT, "progress_interval_ms"),
     # Measures.
     ("k_1e9", "merge", dict(measure=merge_pb2.Measure(type=merge_pb2.Measure.TYPE_INVERSE_CLEARANCE, k=1e9)), C.INVALID_ARGUMENT, "measure.k"),

@@ -731,6 +731,45 @@ def merge_server_same_lines_and_exit_codes(env):
 
 
 @case
+def merge_check_sampled_says_not_certified(env):
+    """--check sampled: the result says how its path was checked (check_mode, certified false),
+    the printout says it is not certified, its path passes `check --sampled`, and no distance
+    query was asked; the same lines with --server. The default says certified. An unknown mode
+    exits 2 naming the flag."""
+    results = {}
+    for mode in ("certified", "sampled"):
+        out = "check_%s.json" % mode
+        proc = env.run("merge", "-q", "--scene", env.scene, "--paths", env.paths, "--check", mode,
+                       "--out", out)
+        expect(proc.returncode == 0, "merge --check %s failed: exit %d" % (mode, proc.returncode))
+        results[mode] = (proc, json.loads((env.work / out).read_text()))
+    proc, certified = results["certified"]
+    expect(certified.get("certified") is True, "the default result is not marked certified")
+    expect(certified.get("check_mode") == "CHECK_MODE_CERTIFIED", "default check_mode %r" %
+           certified.get("check_mode"))
+    expect("NOT certified" not in proc.stdout, "the default printout says not certified")
+    proc, sampled = results["sampled"]
+    expect(sampled.get("certified") is False, "a sampled result is not marked uncertified")
+    expect(sampled.get("check_mode") == "CHECK_MODE_SAMPLED", "sampled check_mode %r" %
+           sampled.get("check_mode"))
+    expect(int(sampled["stats"]["distance_queries"]) == 0, "a sampled length merge asked "
+           "distance queries")
+    expect("NOT certified" in proc.stdout, "the printout does not say the path is not certified")
+    path = check_result(env, sampled)
+    pathset = env.write("sampled_path.json", {"paths": [
+        {"name": "merged", "waypoints": [{"values": w["values"]} for w in path]}]})
+    proc = env.run("check", "--sampled", "--scene", env.scene, "--paths", pathset)
+    expect(proc.returncode == 0, "check --sampled rejected the sampled merge's path")
+    with env.server() as server:
+        local = env.run("merge", "-q", "--scene", env.scene, "--paths", env.paths, "--check",
+                        "sampled")
+        remote = env.run("merge", "-q", "--server", server.target, "--scene", env.scene,
+                         "--paths", env.paths, "--check", "sampled")
+        same_lines(local, remote, "merge --check sampled")
+    env.merge_bad("--check", "--check", "approximate")
+
+
+@case
 def merge_partial_shortcuts_on_a_mesh_scene(env):
     """--partial-shortcuts on the rod through the holed wall (SE(3)): a certified path no longer
     than the best input and other than the defaults' (the flag reaches the post-optimization),

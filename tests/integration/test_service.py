@@ -188,6 +188,41 @@ def test_restarts_reach_the_post_optimization(client):
     assert "options.optimize_restarts" in error.value.message
 
 
+def test_sampled_merge_is_marked_uncertified(client):
+    """check_mode sampled: every motion checked at its samples only (no distance query under
+    length), and the result says so (check_mode echoed, certified False with presence), also on
+    a requery of its H-Graph; its path passes the sampled check from start to goal. The default
+    says certified. An unknown mode is refused naming the field."""
+    plain = client.merge(input_paths()).result
+    assert plain.HasField("certified") and plain.certified
+    assert plain.check_mode == merge_pb2.CHECK_MODE_CERTIFIED
+    assert plain.stats.distance_queries > 0
+
+    merged = client.merge(input_paths(), check="sampled")
+    sampled = merged.result
+    assert sampled.HasField("certified") and not sampled.certified
+    assert sampled.check_mode == merge_pb2.CHECK_MODE_SAMPLED
+    assert sampled.stats.distance_queries == 0 and sampled.stats.collision_checks > 0
+    assert not sampled.quality.has_clearance
+    report = client.check([sampled.path], sampled=True).paths[0]
+    assert report.valid and not report.certified, report
+    assert report.quality.length == pytest.approx(sampled.quality.length, rel=1e-9)
+    inputs = [[list(q.values) for q in p.waypoints] for p in input_paths().paths]
+    assert list(sampled.path.waypoints[0].values) == pytest.approx(inputs[0][0])
+    assert list(sampled.path.waypoints[-1].values) == pytest.approx(inputs[0][-1])
+
+    again = client.requery(merged.hgraph, "bottleneck-clearance")
+    assert again.HasField("certified") and not again.certified
+    assert again.check_mode == merge_pb2.CHECK_MODE_SAMPLED
+
+    with pytest.raises(hgraph_client.HgraphError) as e:
+        client.merge(input_paths(), options=merge_pb2.MergeOptions(check_mode=7))
+    assert e.value.code == grpc.StatusCode.INVALID_ARGUMENT
+    assert "options.check_mode" in e.value.message and e.value.field == "options.check_mode"
+    with pytest.raises(ValueError, match="check"):
+        client.merge(input_paths(), check="approximately")
+
+
 def test_requery_counts_what_it_added_against_the_cache(server, client):
     """A requery grows its stored H-Graph (here the post-optimization's points under length,
     after a merge under inverse clearance that has none): the cache counts the H-Graph at its new

@@ -485,6 +485,11 @@ TEST(AdapterTest, MergeOptionsDefaultsAndErrors) {
   EXPECT_EQ(options.candidates.gap_init, CandidateOptions().gap_init);
   EXPECT_EQ(options.endpoint_tolerance, MergeOptions().endpoint_tolerance);
   EXPECT_EQ(options.max_node_spacing, 0);
+  EXPECT_EQ(options.check_mode, CheckMode::kCertified);
+  proto.set_check_mode(v1::CHECK_MODE_SAMPLED);
+  EXPECT_EQ(MergeOptionsFromProto(proto).check_mode, CheckMode::kSampled);
+  proto.set_check_mode(v1::CHECK_MODE_CERTIFIED);
+  EXPECT_EQ(MergeOptionsFromProto(proto).check_mode, CheckMode::kCertified);
 
   proto.set_max_node_spacing(-0.5);
   EXPECT_EQ(ErrorOf([&] { MergeOptionsFromProto(proto); }).field(), "options.max_node_spacing");
@@ -509,6 +514,9 @@ TEST(AdapterTest, MergeOptionsDefaultsAndErrors) {
            {[](v1::MergeOptions* o) { o->set_gap_extend(-1); }, "options.gap_extend"},
            {[](v1::MergeOptions* o) { o->set_resolution(-0.01); }, "options.resolution"},
            {[](v1::MergeOptions* o) { o->set_threads(-2); }, "options.threads"},
+           // A value from a newer client (proto3 enums are open): refused, not read as certified.
+           {[](v1::MergeOptions* o) { o->set_check_mode(static_cast<v1::CheckMode>(7)); },
+            "options.check_mode"},
        }) {
     v1::MergeOptions bad;
     set(&bad);
@@ -576,6 +584,34 @@ TEST(AdapterTest, MergeResultToProtoAndJson) {
   EXPECT_EQ(back.objective, 1.5);
   EXPECT_TRUE(back.quality.has_clearance);
   EXPECT_EQ(back.quality.min_clearance, 0.25);
+}
+
+// The result says how its path was checked, so that a sampled path never reads as certified:
+// check_mode echoed and `certified` set (with presence) either way, and a reader takes either
+// field saying sampled as sampled.
+TEST(AdapterTest, MergeResultSaysWhetherItsPathIsCertified) {
+  MergeResult result;
+  v1::MergeResult proto = MergeResultToProto(result);
+  EXPECT_EQ(proto.check_mode(), v1::CHECK_MODE_CERTIFIED);
+  ASSERT_TRUE(proto.has_certified());
+  EXPECT_TRUE(proto.certified());
+  EXPECT_EQ(MergeResultFromProto(proto).check_mode, CheckMode::kCertified);
+
+  result.check_mode = CheckMode::kSampled;
+  proto = MergeResultToProto(result);
+  EXPECT_EQ(proto.check_mode(), v1::CHECK_MODE_SAMPLED);
+  ASSERT_TRUE(proto.has_certified());
+  EXPECT_FALSE(proto.certified());
+  EXPECT_NE(ToJson(proto).find("\"certified\": false"), std::string::npos) << ToJson(proto);
+  EXPECT_EQ(MergeResultFromProto(proto).check_mode, CheckMode::kSampled);
+  proto.clear_check_mode();
+  EXPECT_EQ(MergeResultFromProto(proto).check_mode, CheckMode::kSampled);
+  proto.set_check_mode(v1::CHECK_MODE_SAMPLED);
+  proto.clear_certified();
+  EXPECT_EQ(MergeResultFromProto(proto).check_mode, CheckMode::kSampled);
+  // A server older than both fields certified every merged path.
+  proto.clear_check_mode();
+  EXPECT_EQ(MergeResultFromProto(proto).check_mode, CheckMode::kCertified);
 }
 
 TEST(AdapterTest, QualityFromAServerBeforeHasClearanceKeepsItsClearances) {

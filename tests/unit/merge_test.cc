@@ -133,6 +133,93 @@ TEST_F(MergeTest, LengthMergeProfilesItsPathOnlyOnRequest) {
   EXPECT_GT(widest.quality.min_clearance, 0);
 }
 
+// A sampled merge (MergeOptions::check_mode kSampled) checks every motion at its samples only,
+// as OMPL's discrete motion validator does: under length not one distance query (the H-Graph's
+// edges, bridges and the post-optimization's shortcuts and restarts alike), and the result says
+// it is not certified, where the default pays distance queries for its certificate and says so.
+// Its path passes the sampled check of CheckPaths, keeps the endpoints and is no longer than the
+// best input.
+TEST_F(MergeTest, SampledMergeChecksSamplesOnlyAndSaysSo) {
+  const LocalPlanner planner = MakePlanner();
+  const std::vector<InputPath> inputs = PerturbedPaths(planner, 1, 4);
+  double shortest_input = INFINITY;
+  for (const InputPath& input : inputs) {
+    shortest_input = std::min(shortest_input, PathLength(planner.space(), input));
+  }
+  const MergeResult certified = Merge(planner, MergeRequest{.paths = inputs});
+  EXPECT_EQ(certified.check_mode, CheckMode::kCertified);
+  EXPECT_GT(certified.stats.distance_queries, 0);
+  const InputReport certified_check = CheckPaths(planner, {.paths = {certified.path}}).paths.at(0);
+  EXPECT_TRUE(certified_check.valid && certified_check.certified);
+  for (const MergeOptions& options :
+       {MergeOptions{.check_mode = CheckMode::kSampled},
+        MergeOptions{.candidates = {.variant = Variant::kAllPairs},
+        .check_mode = CheckMode::kSampled},
+        MergeOptions{.check_mode = CheckMode::kSampled, .optimize_restarts = 2}}) {
+    SCOPED_TRACE(std::string(VariantName(options.candidates.variant)) + ", restarts " +
+                 std::to_string(options.optimize_restarts));
+    const MergeResult r = Merge(planner, MergeRequest{.paths = inputs, .options = options});
+    EXPECT_EQ(r.check_mode, CheckMode::kSampled);
+    EXPECT_EQ(r.stats.distance_queries, 0);
+    EXPECT_EQ(r.stats.node_clearances, 0);
+    EXPECT_GT(r.stats.collision_checks, 0);
+    EXPECT_GT(r.stats.optimize_rounds, 0);
+    EXPECT_FALSE(r.quality.has_clearance);
+    const InputReport check =
+        CheckPaths(planner, {.paths = {r.path}, .mode = CheckMode::kSampled}).paths.at(0);
+    EXPECT_TRUE(check.valid) << check.invalid_reason;
+    EXPECT_FALSE(check.certified);
+    ASSERT_GE(r.path.waypoints.size(), 2u);
+    EXPECT_TRUE(r.path.waypoints.front().isApprox(inputs[0].waypoints.front()));
+    EXPECT_TRUE(r.path.waypoints.back().isApprox(inputs[0].waypoints.back()));
+    EXPECT_LE(r.quality.length, shortest_input + 1e-9);
+    EXPECT_NEAR(r.quality.length, check.quality.length, 1e-9 * check.quality.length);
+    EXPECT_LE(r.objective, r.hgraph_objective + 1e-9);
+    if (options.candidates.variant == Variant::kEditDistance) {
+      // Every motion the certified merge may use, the sampled one may too: its H-Graph optimum
+      // is never longer.
+      EXPECT_LE(r.hgraph_objective, certified.hgraph_objective + 1e-9);
+    }
+  }
+}
+
+// The measures of clearance in a sampled merge still compute the clearances their values are
+// made of, and take a motion valid at its samples: the same guarantees of the path (valid at
+// its samples, the endpoints, no worse than the best input), marked not certified; a requery of
+// its H-Graph keeps the mode.
+TEST_F(MergeTest, SampledMergeUnderClearanceMeasuresKeepsTheInvariants) {
+  const LocalPlanner planner = MakePlanner();
+  const std::vector<InputPath> inputs = PerturbedPaths(planner, 2, 4);
+  const double safest_input = SafestInputClearance(planner, inputs);
+  ASSERT_GT(safest_input, 0);
+  HybridizationSession session(
+      planner, MergeRequest{.paths = inputs,
+                            .options = {.check_mode = CheckMode::kSampled, .report_inputs = true}});
+  for (const MeasureSpec& measure :
+       {MeasureSpec{.type = MeasureType::kBottleneckClearance},
+        MeasureSpec{.type = MeasureType::kInverseClearance, .k = 3},
+        MeasureSpec{.type = MeasureType::kSafeLength, .safety = 0.5 * safest_input},
+        MeasureSpec{.type = MeasureType::kLength}}) {
+    SCOPED_TRACE(MeasureTypeName(measure.type));
+    const MergeResult r = session.Query(measure);
+    EXPECT_EQ(r.check_mode, CheckMode::kSampled);
+    const InputReport check =
+        CheckPaths(planner, {.paths = {r.path}, .mode = CheckMode::kSampled}).paths.at(0);
+    EXPECT_TRUE(check.valid) << check.invalid_reason;
+    EXPECT_TRUE(r.path.waypoints.front().isApprox(inputs[0].waypoints.front()));
+    EXPECT_TRUE(r.path.waypoints.back().isApprox(inputs[0].waypoints.back()));
+    ASSERT_GE(r.best_input, 0);
+    EXPECT_LE(r.objective, r.best_input_objective + 1e-9 * (1 + std::abs(r.best_input_objective)));
+    if (measure.type != MeasureType::kLength) {
+      EXPECT_TRUE(r.quality.has_clearance);
+      EXPECT_GT(r.quality.min_clearance, 0);
+    }
+    if (measure.type == MeasureType::kSafeLength) {
+      EXPECT_GE(r.quality.min_clearance, measure.safety);
+    }
+  }
+}
+
 struct Case {
   Variant variant;
   MeasureSpec measure;
@@ -257,6 +344,7 @@ TEST(MergeCertifiedTest, GrazingMotionsNeverReachTheOutput) {
   for (const InputReport& input : CheckPaths(planner, {.paths = inputs}).paths) {
     shortest_input = std::min(shortest_input, input.quality.length);
   }
+  double certified_optimum = NAN;
   for (const MergeOptions& options :
        {MergeOptions{}, MergeOptions{.evaluation = Evaluation::kEager},
         MergeOptions{.candidates = {.variant = Variant::kAllPairs}}}) {
@@ -265,7 +353,24 @@ TEST(MergeCertifiedTest, GrazingMotionsNeverReachTheOutput) {
     EXPECT_TRUE(check.valid);
     EXPECT_TRUE(check.certified) << "min clearance " << check.quality.min_clearance;
     EXPECT_LT(r.quality.length, shortest_input);
+    if (options.evaluation == Evaluation::kLazy &&
+        options.candidates.variant == Variant::kEditDistance) {
+      certified_optimum = r.hgraph_objective;
+    }
   }
+  // A sampled merge may take the grazing motions (valid at their samples): its path passes the
+  // sampled check, and with more motions to use its H-Graph optimum is never longer.
+  const MergeResult sampled =
+      Merge(planner, MergeRequest{.paths = inputs, .options = {.check_mode = CheckMode::kSampled}});
+  EXPECT_EQ(sampled.check_mode, CheckMode::kSampled);
+  EXPECT_EQ(sampled.stats.distance_queries, 0);
+  const InputReport check =
+      CheckPaths(planner, {.paths = {sampled.path}, .mode = CheckMode::kSampled}).paths.at(0);
+  EXPECT_TRUE(check.valid) << check.invalid_reason;
+  EXPECT_TRUE(sampled.path.waypoints.front().isApprox(inputs[0].waypoints.front()));
+  EXPECT_TRUE(sampled.path.waypoints.back().isApprox(inputs[0].waypoints.back()));
+  EXPECT_LT(sampled.quality.length, shortest_input);
+  EXPECT_LE(sampled.hgraph_objective, certified_optimum + 1e-9);
 }
 
 // The mesh problems (the wrench among boxes; the rod through the holed wall, mesh against mesh)

@@ -52,6 +52,14 @@ EVALUATIONS = {
     "eager": merge_pb2.EVALUATION_EAGER,
 }
 
+# MergeOptions.check_mode: "certified" (the default) proves every motion of the merged path free;
+# "sampled" checks it at the resolution's samples only, as OMPL's DiscreteMotionValidator does
+# (MergeResult.certified False).
+CHECK_MODES = {
+    "certified": merge_pb2.CHECK_MODE_CERTIFIED,
+    "sampled": merge_pb2.CHECK_MODE_SAMPLED,
+}
+
 
 class HgraphError(Exception):
     """A failed call: the canonical gRPC code, the server's message (which names the field) and
@@ -106,7 +114,8 @@ class MergeOutcome:
     progress_events: int
     # False when the call stopped early (best_so_far and the deadline, or StopMerge) and `result`
     # holds the best path streamed so far: its path, objective, measure and (when its event was
-    # received) hgraph_objective only, no report; the path is certified all the same.
+    # received) hgraph_objective only, no report; the path is certified all the same (unless
+    # the merge asked for check="sampled": result.certified says which).
     complete: bool = True
     # The H-Graph's generation (1 after a merge; AddPaths increments it); 0 when not kept.
     generation: int = 0
@@ -462,7 +471,7 @@ class Client:
               variant: Optional[str] = None, options: Optional[merge_pb2.MergeOptions] = None,
               max_node_spacing: Optional[float] = None,
               evaluation: Optional[str] = None, report_inputs: Optional[bool] = None,
-              report_clearance: Optional[bool] = None,
+              report_clearance: Optional[bool] = None, check: Optional[str] = None,
               optimize_ms: Optional[float] = None, restarts: Optional[int] = None,
               partial_shortcuts: Optional[bool] = None,
               progress_paths: Optional[bool] = None, best_so_far: bool = False,
@@ -476,7 +485,10 @@ class Client:
         `max_node_spacing` subdivides long input edges in the H-Graph so that bridges can leave
         an input mid-edge (MergeOptions.max_node_spacing). `evaluation` is "lazy" (the default:
         only the edges the search wants are checked) or "eager"; `report_inputs` checks every
-        input edge so that every input report is complete (InputReport.checked);
+        input edge so that every input report is complete (InputReport.checked); `check` is
+        "certified" (the default: every motion of the merged path proven free) or "sampled"
+        (checked at the resolution's samples only, as OMPL's DiscreteMotionValidator: cheaper,
+        may miss a collision between two samples; result.certified is False);
         `report_clearance` profiles the merged path's clearance under length (otherwise its
         quality has the length only, PathQuality.has_clearance False); `optimize_ms`
         bounds the post-optimization (0 = off; unset = automatic; a budget given is spent on
@@ -504,7 +516,7 @@ class Client:
         return self._recovering(lambda: self._merge(
             paths, measure=measure, k=k, safety=safety, variant=variant, options=options,
             max_node_spacing=max_node_spacing, evaluation=evaluation,
-            report_inputs=report_inputs, report_clearance=report_clearance,
+            report_inputs=report_inputs, report_clearance=report_clearance, check=check,
             optimize_ms=optimize_ms, restarts=restarts,
             partial_shortcuts=partial_shortcuts, progress_paths=progress_paths,
             best_so_far=best_so_far, optimize_to_deadline=optimize_to_deadline,
@@ -513,7 +525,7 @@ class Client:
             timeout=timeout), session)
 
     def _merge(self, paths, *, measure, k, safety, variant, options, max_node_spacing,
-               evaluation, report_inputs, report_clearance, optimize_ms, restarts,
+               evaluation, report_inputs, report_clearance, check, optimize_ms, restarts,
                partial_shortcuts, progress_paths, best_so_far, optimize_to_deadline,
                deadline_margin_ms, session, on_progress, progress_interval_ms, seed, hgraph_id,
                timeout) -> MergeOutcome:
@@ -526,6 +538,11 @@ class Client:
             opts.max_node_spacing = max_node_spacing
         if evaluation is not None:
             opts.evaluation = EVALUATIONS[evaluation]
+        if check is not None:
+            if check not in CHECK_MODES:
+                raise ValueError(f"check: unknown check mode {check!r} (expected "
+                                 f"{' or '.join(CHECK_MODES)})")
+            opts.check_mode = CHECK_MODES[check]
         if report_inputs is not None:
             opts.report_inputs = report_inputs
         if report_clearance is not None:
@@ -562,7 +579,12 @@ class Client:
                     path = p.path if p.HasField("path") else None
                     if path is not None:
                         if best is None:
-                            best = merge_pb2.MergeResult(measure=request.measure)
+                            sampled = opts.check_mode == merge_pb2.CHECK_MODE_SAMPLED
+                            best = merge_pb2.MergeResult(
+                                measure=request.measure,
+                                check_mode=(merge_pb2.CHECK_MODE_SAMPLED if sampled
+                                            else merge_pb2.CHECK_MODE_CERTIFIED),
+                                certified=not sampled)
                         if p.done == 0:
                             best.hgraph_objective = objective
                         best.path.CopyFrom(path)
