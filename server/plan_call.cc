@@ -1,3 +1,4 @@
+#include <condition_variable>
 #include <deque>
 #include <mutex>
 #include <string>
@@ -32,7 +33,15 @@ class PathMergerService::PlanCall final : public grpc::ServerWriteReactor<v1::Pl
     Pump(/*write_done=*/true);
   }
   void OnCancel() override { token_.Cancel(); }
-  void OnDone() override { delete this; }
+  // The Finish may come from OnWriteDone's Pump while Complete's own Pump is still to run on the
+  // worker: the call is freed only once Complete has returned.
+  void OnDone() override {
+    {
+      std::unique_lock lock(mutex_);
+      completed_.wait(lock, [this] { return complete_returned_; });
+    }
+    delete this;
+  }
 
  private:
   void Plan() {
@@ -132,6 +141,9 @@ class PathMergerService::PlanCall final : public grpc::ServerWriteReactor<v1::Pl
       done_ = true;
     }
     Pump(/*write_done=*/false);
+    std::lock_guard lock(mutex_);
+    complete_returned_ = true;
+    completed_.notify_all();
   }
 
   // Starts the next write, or the Finish once the queue is drained after the work is done.
@@ -163,6 +175,8 @@ class PathMergerService::PlanCall final : public grpc::ServerWriteReactor<v1::Pl
   bool writing_ = false;
   bool done_ = false;
   bool finished_ = false;
+  bool complete_returned_ = false;  // OnDone waits for it
+  std::condition_variable completed_;
   grpc::Status status_;
 };
 
