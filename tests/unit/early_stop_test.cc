@@ -122,6 +122,40 @@ TEST(EarlyStopTest, CertificatesOnTheBoundAreExactCertificates) {
   }
 }
 
+// Threshold queries (the default) change what a certificate costs, never what it decides: the
+// same verdict, the same point of contact, the same number of queries as unbounded distances.
+TEST(EarlyStopTest, ThresholdCertificatesDecideAsUnboundedOnes) {
+  for (const MeshProblem& p : MeshProblems()) {
+    SCOPED_TRACE(p.name);
+    const auto world = LoadWorld(p);
+    const LocalPlanner threshold(world);
+    const LocalPlanner unbounded(world, {.certificate_threshold = false});
+    std::mt19937_64 rng(13);
+    int certified = 0;
+    int invalid = 0;
+    for (int i = 0; i < 60; ++i) {
+      const Config from = world->space().Sample(rng);
+      const Config far = world->space().Sample(rng);
+      const Config to = world->space().Interpolate(from, far, i % 2 ? 0.1 : 1.0);
+      for (const EdgeProof mode : {EdgeProof::kCertificate, EdgeProof::kCertificateOrGiveUp}) {
+        const EdgeCheckRequest request{.from = &from, .to = &to, .proof = mode};
+        const EdgeReport a = threshold.CheckEdge(request);
+        const EdgeReport b = unbounded.CheckEdge(request);
+        EXPECT_EQ(a.state, b.state) << "motion " << i;
+        EXPECT_EQ(a.certified, b.certified) << "motion " << i;
+        EXPECT_EQ(a.invalid_at, b.invalid_at) << "motion " << i;
+        EXPECT_EQ(a.collision_checks, b.collision_checks) << "motion " << i;
+        EXPECT_EQ(a.distance_queries, b.distance_queries) << "motion " << i;
+        certified += a.certified;
+        invalid += a.state == EdgeState::kInvalid;
+      }
+    }
+    // Both kinds of answer were compared.
+    EXPECT_GT(certified, 5);
+    EXPECT_GT(invalid, 5);
+  }
+}
+
 // A default merge of the bench's fixed home inputs on a checker whose certificates take the
 // early-stopped bound: its path passes CheckPaths on an exact checker, certified, and is as
 // short as the exact checker's to within the post-optimization's randomness.
