@@ -192,6 +192,11 @@ struct CollisionWorld::Impl {
   fcl::DynamicAABBTreeCollisionManagerd obstacle_manager;
 
   size_t memory_bytes = 0;
+  // Every robot body and obstacle is a mesh: the nearest points FCL reports are those of two
+  // triangles, exactly (ClearanceFrom starts from them). Between a triangle and a primitive GJK
+  // finds them to its tolerance, and double_wrench's boxes showed witness pairs nearer than the
+  // clearance FCL reported a moment later, so a scene with primitives starts every query afresh.
+  bool meshes_only = true;
 };
 
 CollisionWorld::CollisionWorld(std::shared_ptr<const Scene> scene)
@@ -208,6 +213,7 @@ CollisionWorld::CollisionWorld(std::shared_ptr<const Scene> scene)
     w.body_component.push_back(body.component);
     w.body_offset.push_back(body.offset);
     w.body_radius.push_back(FarthestDistance(body.shape, body.offset.inverse().translation()));
+    w.meshes_only = w.meshes_only && body.shape.type == ShapeType::kMesh;
   }
   if (scene_->self_collision) {
     for (int i = 0; i < num_bodies; ++i) {
@@ -222,6 +228,7 @@ CollisionWorld::CollisionWorld(std::shared_ptr<const Scene> scene)
     w.obstacles.push_back(std::make_unique<fcl::CollisionObjectd>(
         builder.Build(obstacle.shape), obstacle.pose.linear(), obstacle.pose.translation()));
     registered.push_back(w.obstacles.back().get());
+    w.meshes_only = w.meshes_only && obstacle.shape.type == ShapeType::kMesh;
   }
   w.obstacle_manager.registerObjects(registered);
   w.obstacle_manager.setup();
@@ -309,9 +316,29 @@ double CollisionContext::Clearance(const Config& q, ClearanceWitness* witness) {
   if (witness != nullptr) *witness = ClearanceWitness{};
   if (!world_.space().InBounds(q)) return 0.0;
   PlaceBodies(world_, impl_->bodies, q);
+  return Nearest(std::numeric_limits<double>::infinity(), witness);
+}
+
+double CollisionContext::ClearanceFrom(const Config& q, double cap, ClearanceWitness* hint) {
+  HGRAPH_CHECK(cap > 0 && hint != nullptr);
+  ++distance_queries_;
+  if (!world_.space().InBounds(q)) return 0.0;
+  PlaceBodies(world_, impl_->bodies, q);
+  double start = cap;
+  const int bodies = static_cast<int>(impl_->bodies.size());
+  if (world_.impl().meshes_only && hint->body >= 0 && hint->body < bodies &&
+      hint->other_body < bodies) {
+    std::vector<Eigen::Isometry3d> poses(impl_->bodies.size());
+    for (int b = 0; b < bodies; ++b) poses[b] = impl_->bodies[b]->getTransform();
+    start = std::min(start, CollisionWorld::WitnessDistance(*hint, poses));
+  }
+  return std::min(cap, Nearest(start, hint));
+}
+
+double CollisionContext::Nearest(double start, ClearanceWitness* witness) {
   const CollisionWorld::Impl& w = world_.impl();
   DistanceData& data = impl_->distance;
-  data.min_distance = std::numeric_limits<double>::infinity();
+  data.min_distance = start;
   data.request.enable_nearest_points = witness != nullptr;
   data.request.rel_err = 0;
   data.request.abs_err = 0;

@@ -75,7 +75,8 @@ class EdgeCheck {
   EdgeCheck(const Space& space, const std::vector<int>& body_component,
             const std::vector<double>& body_radius, CollisionContext& context, const Config& from,
             const Config& to, const CancelToken* cancel, const ClearanceBound* bound = nullptr,
-            std::atomic<int64_t>* bound_total = nullptr, double rel_err = 0, bool threshold = false)
+            std::atomic<int64_t>* bound_total = nullptr, double rel_err = 0, bool threshold = false,
+            bool warm_start = false)
       : space_(space),
         body_component_(body_component),
         body_radius_(body_radius),
@@ -86,7 +87,8 @@ class EdgeCheck {
         bound_(bound),
         bound_total_(bound_total),
         rel_err_(rel_err),
-        threshold_(threshold) {}
+        threshold_(threshold),
+        warm_start_(warm_start) {}
   ~EdgeCheck() {
     if (bound_total_ != nullptr) *bound_total_ += bound_queries_;
   }
@@ -112,17 +114,24 @@ class EdgeCheck {
       // nothing beyond it is worth measuring. Without an early stop a value below the cap is
       // exact; with one, only a 0 (contact) is.
       const double cap = kCapMargin * whole_bound_ * std::max(t, 1 - t);
-      const double lower = context_.ClearanceLowerBound(q, rel_err_, cap);
+      const double lower = rel_err_ == 0 && warm_start_
+                               ? context_.ClearanceFrom(q, cap, &hint_)
+                               : context_.ClearanceLowerBound(q, rel_err_, cap);
       return Bounded{
           .t = t, .clearance = lower, .exact = lower <= 0 || (rel_err_ == 0 && lower < cap)};
     }
-    return Bounded{.t = t, .clearance = context_.Clearance(q), .exact = true};
+    return Bounded{.t = t, .clearance = Exact(q), .exact = true};
+  }
+  // The exact clearance at q, from the last query's nearest points when warm starts are on.
+  double Exact(const Config& q) {
+    return warm_start_ ? context_.ClearanceFrom(q, std::numeric_limits<double>::infinity(), &hint_)
+                       : context_.Clearance(q);
   }
   // Replaces a bound by the exact clearance. Returns false (and records where) if the sample
   // is in contact.
   bool MakeExact(Bounded& s, const Config& q) {
     if (!s.exact) {
-      s.clearance = context_.Clearance(q);
+      s.clearance = Exact(q);
       s.exact = true;
     }
     if (s.clearance <= 0) {
@@ -180,7 +189,7 @@ class EdgeCheck {
     }
     const ClearanceSample mid{.t = 0.5 * (lo.t + hi.t)};
     const Config q_mid = At(mid.t);
-    const double clearance = context_.Clearance(q_mid);
+    const double clearance = Exact(q_mid);
     if (clearance <= 0) {
       invalid_at_ = mid.t;
       return false;
@@ -270,7 +279,7 @@ class EdgeCheck {
       const double clearance =
           known != nullptr && next_known < known->size() && (*known)[next_known].t == t
               ? (*known)[next_known].clearance
-              : context_.Clearance(grid.back());
+              : Exact(grid.back());
       // Touching contact: valid for FCL's collision test, but not free.
       if (clearance <= 0) {
         invalid_at_ = t;
@@ -303,6 +312,9 @@ class EdgeCheck {
   std::atomic<int64_t>* bound_total_;
   const double rel_err_;
   const bool threshold_;
+  const bool warm_start_;
+  // Where the last query found the clearance: the next one starts from its points' distance.
+  ClearanceWitness hint_;
   double whole_bound_ = 0;  // the motion bound of the whole edge (Advance)
   // A sample with the motion bound of the whole edge, times max(t, 1 - t), as clearance covers
   // it alone with advancement's margin (0.999) to spare.
@@ -393,7 +405,8 @@ EdgeReport LocalPlanner::CheckEdge(const EdgeCheckRequest& request) const {
   // Three stages, each skipped where the request knows or does not ask for its answer: the
   // samples at the resolution, conservative advancement for a certificate, the profile.
   const int segments = SampleCount(report.length) - 1;
-  EdgeCheck check(s, impl_->body_component, impl_->body_radius, context, from, to, request.cancel);
+  EdgeCheck check(s, impl_->body_component, impl_->body_radius, context, from, to, request.cancel,
+                  nullptr, nullptr, 0, false, options_.warm_start);
   if (!request.known.samples_valid) {
     const double t = check.FirstInvalidSample(segments, request.known);
     if (t >= 0) return invalid(t);
@@ -403,7 +416,8 @@ EdgeReport LocalPlanner::CheckEdge(const EdgeCheckRequest& request) const {
   if (request.proof != EdgeProof::kProfile) {
     EdgeCheck advance(s, impl_->body_component, impl_->body_radius, context, from, to,
                       request.cancel, options_.clearance_bound.get(), &impl_->bound_queries,
-                      options_.certificate_rel_err, options_.certificate_threshold);
+                      options_.certificate_rel_err, options_.certificate_threshold,
+                      options_.warm_start);
     const EdgeCheck::Advanced advanced = advance.Advance(segments);
     if (advanced.invalid_at >= 0) return invalid(advanced.invalid_at);
     if (advanced.certified) {

@@ -53,6 +53,11 @@ struct LocalPlannerOptions {
   // at it, the sample certifies the motion on its own, so the certificate takes exactly the
   // steps and queries exact distances would. False: unbounded exact distances.
   bool certificate_threshold = true;
+  // The distance queries of one motion's check (certificates, profiles) start from the nearest
+  // points the previous query found (CollisionContext::ClearanceFrom): the same answers, with
+  // FCL pruning from a distance near the answer instead of from the threshold or infinity.
+  // False: every query starts afresh.
+  bool warm_start = true;
 };
 
 // The clearance bound of a world (a distance field sampled on `threads` threads, 0: all cores,

@@ -89,6 +89,8 @@ struct Problem {
   std::map<double, std::unique_ptr<LocalPlanner>> rel_planners;
   // Certificates on unbounded exact distances (certificate_threshold off).
   std::unique_ptr<LocalPlanner> unbounded_planner;
+  // Every distance query started afresh (warm_start off).
+  std::unique_ptr<LocalPlanner> cold_planner;
   double resolution = 0.01;
   std::vector<InputPath> inputs;
   std::vector<double> input_lengths;
@@ -114,6 +116,7 @@ struct Method {
   bool clearance_bound = false;  // runs on Problem::bound_planner
   double rel_err = 0;            // > 0: runs on Problem::rel_planners[rel_err]
   bool unbounded = false;        // runs on Problem::unbounded_planner
+  bool cold = false;             // runs on Problem::cold_planner
   // OMPL's pipeline as OMPL ships it (its DiscreteMotionValidator): the name of the certified
   // OMPL method that runs the same pipeline on our checker; empty for every other method.
   std::string shipped_twin;
@@ -213,6 +216,7 @@ Run RunOnce(const Method& m, const Problem& p, double k) {
   const LocalPlanner& planner = m.clearance_bound ? *p.bound_planner
                                 : m.rel_err > 0   ? *p.rel_planners.at(m.rel_err)
                                 : m.unbounded     ? *p.unbounded_planner
+                                : m.cold          ? *p.cold_planner
                                                   : *p.planner;
   CountingChecker counter(planner);
   const int64_t cc0 = planner.total_collision_checks();
@@ -300,6 +304,11 @@ std::vector<Method> Methods(const Problem& p, bool inverse_clearance_pair, uint6
                                   "hgraph defaults, certificates without threshold", {}, {});
   unbounded.unbounded = true;
   m.push_back(std::move(unbounded));
+  // The defaults with every distance query started afresh: what warm starts gain.
+  Method cold =
+      HgraphMethod("hgraph-cold-queries", "hgraph defaults, queries without warm start", {}, {});
+  cold.cold = true;
+  m.push_back(std::move(cold));
   // The defaults with certificates on FCL's early-stopped distance: what each error gains.
   for (double rel : kCertificateRelErrs) {
     std::ostringstream name;
@@ -397,6 +406,8 @@ Problem LoadProblem(const std::string& name, const std::string& file, const fs::
       p.world, LocalPlannerOptions{.resolution = p.resolution, .clearance_bound = bound});
   p.unbounded_planner = std::make_unique<LocalPlanner>(
       p.world, LocalPlannerOptions{.resolution = p.resolution, .certificate_threshold = false});
+  p.cold_planner = std::make_unique<LocalPlanner>(
+      p.world, LocalPlannerOptions{.resolution = p.resolution, .warm_start = false});
   for (double rel : kCertificateRelErrs) {
     p.rel_planners[rel] = std::make_unique<LocalPlanner>(
         p.world, LocalPlannerOptions{.resolution = p.resolution, .certificate_rel_err = rel});

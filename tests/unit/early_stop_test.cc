@@ -156,6 +156,98 @@ TEST(EarlyStopTest, ThresholdCertificatesDecideAsUnboundedOnes) {
   }
 }
 
+// A query started from a witness (CollisionContext::ClearanceFrom) answers min(Clearance, cap),
+// whatever the witness: one found near the state (as along a motion), one found far from it, or
+// none; and it leaves a witness whose points are as far apart as the answer.
+TEST(EarlyStopTest, QueriesFromAWitnessAnswerTheClearanceUpToTheCap) {
+  constexpr double kTolerance = 1e-9;
+  for (const MeshProblem& p : MeshProblems()) {
+    SCOPED_TRACE(p.name);
+    const auto world = LoadWorld(p);
+    const Space& space = world->space();
+    auto exact_context = world->MakeContext();
+    auto context = world->MakeContext();
+    std::mt19937_64 rng(17);
+    int free = 0;
+    int witnessed = 0;
+    for (int i = 0; i < 300; ++i) {
+      const Config q = space.Sample(rng);
+      const double exact = exact_context->Clearance(q);
+      // A witness from a state a few hundredths of the space's extent away, one from a random
+      // state, and none.
+      const Config near = space.Interpolate(q, space.Sample(rng), 0.02);
+      const Config far = space.Sample(rng);
+      for (int kind = 0; kind < 3; ++kind) {
+        ClearanceWitness hint;
+        if (kind < 2) exact_context->Clearance(kind == 0 ? near : far, &hint);
+        for (const double cap : {std::numeric_limits<double>::infinity(), 0.5 * exact + 1e-3}) {
+          ClearanceWitness w = hint;
+          const double got = context->ClearanceFrom(q, cap, &w);
+          ASSERT_EQ(got == 0, exact == 0) << "state " << i;
+          const double want = std::min(exact, cap);
+          EXPECT_NEAR(got, want, kTolerance * (1 + want)) << "state " << i << " kind " << kind;
+          if (got > 0 && got < cap && w.body >= 0) {
+            std::vector<Eigen::Isometry3d> poses;
+            for (int b = 0; b < static_cast<int>(world->scene().robot.size()); ++b) {
+              poses.push_back(world->BodyPose(b, q));
+            }
+            EXPECT_NEAR(CollisionWorld::WitnessDistance(w, poses), got, 1e-6 * (1 + got))
+                << "state " << i;
+            ++witnessed;
+          }
+        }
+      }
+      free += exact > 0;
+    }
+    EXPECT_GT(free, 20);
+    EXPECT_GT(witnessed, 20);
+    EXPECT_EQ(context->distance_queries(), 300 * 3 * 2);
+  }
+}
+
+// Warm starts (the default) change what a check costs, never what it finds: the same verdict,
+// certificate, point of contact and counts as queries started afresh, and the same profile.
+TEST(EarlyStopTest, WarmStartedChecksDecideAsColdOnes) {
+  for (const MeshProblem& p : MeshProblems()) {
+    SCOPED_TRACE(p.name);
+    const auto world = LoadWorld(p);
+    const LocalPlanner warm(world);
+    const LocalPlanner cold(world, {.warm_start = false});
+    std::mt19937_64 rng(19);
+    int certified = 0;
+    int invalid = 0;
+    int profiled = 0;
+    for (int i = 0; i < 120; ++i) {
+      const Config from = world->space().Sample(rng);
+      const Config far = world->space().Sample(rng);
+      const Config to = world->space().Interpolate(from, far, i % 2 ? 0.1 : 1.0);
+      for (const EdgeProof mode :
+           {EdgeProof::kCertificate, EdgeProof::kCertificateOrGiveUp, EdgeProof::kProfile}) {
+        const EdgeCheckRequest request{.from = &from, .to = &to, .proof = mode};
+        const EdgeReport a = warm.CheckEdge(request);
+        const EdgeReport b = cold.CheckEdge(request);
+        EXPECT_EQ(a.state, b.state) << "motion " << i;
+        EXPECT_EQ(a.certified, b.certified) << "motion " << i;
+        EXPECT_EQ(a.invalid_at, b.invalid_at) << "motion " << i;
+        EXPECT_EQ(a.collision_checks, b.collision_checks) << "motion " << i;
+        EXPECT_EQ(a.distance_queries, b.distance_queries) << "motion " << i;
+        ASSERT_EQ(a.profile.size(), b.profile.size()) << "motion " << i;
+        for (size_t k = 0; k < a.profile.size(); ++k) {
+          EXPECT_EQ(a.profile[k].t, b.profile[k].t);
+          EXPECT_NEAR(a.profile[k].clearance, b.profile[k].clearance,
+                      1e-9 * (1 + b.profile[k].clearance));
+        }
+        certified += a.certified;
+        invalid += a.state == EdgeState::kInvalid;
+        profiled += !a.profile.empty();
+      }
+    }
+    EXPECT_GT(certified, 5);
+    EXPECT_GT(invalid, 5);
+    EXPECT_GT(profiled, 2);
+  }
+}
+
 // A default merge of the bench's fixed home inputs on a checker whose certificates take the
 // early-stopped bound: its path passes CheckPaths on an exact checker, certified, and is as
 // short as the exact checker's to within the post-optimization's randomness.
