@@ -35,10 +35,27 @@ class CancelToken {
   void SetDeadline(std::chrono::steady_clock::time_point deadline) const {
     state_->deadline_ns.store(deadline.time_since_epoch().count(), std::memory_order_relaxed);
   }
-  bool cancelled() const { return state_->cancelled.load(std::memory_order_relaxed); }
+  // A token that stops when this one does, and also at `deadline`: a budget inside the caller's
+  // work. Stopping or cancelling it leaves this one as it is.
+  CancelToken WithDeadline(std::chrono::steady_clock::time_point deadline) const {
+    CancelToken child;
+    child.state_->parent = state_;
+    child.SetDeadline(deadline);
+    return child;
+  }
+  bool cancelled() const {
+    for (const State* s = state_.get(); s != nullptr; s = s->parent.get()) {
+      if (s->cancelled.load(std::memory_order_relaxed)) return true;
+    }
+    return false;
+  }
   bool deadline_passed() const {
-    const auto ns = state_->deadline_ns.load(std::memory_order_relaxed);
-    return ns != 0 && std::chrono::steady_clock::now().time_since_epoch().count() >= ns;
+    const int64_t now = std::chrono::steady_clock::now().time_since_epoch().count();
+    for (const State* s = state_.get(); s != nullptr; s = s->parent.get()) {
+      const auto ns = s->deadline_ns.load(std::memory_order_relaxed);
+      if (ns != 0 && now >= ns) return true;
+    }
+    return false;
   }
   bool stopped() const { return cancelled() || deadline_passed(); }
   // Throws Error(kCancelled) or Error(kDeadlineExceeded) if the work should stop.
@@ -51,6 +68,7 @@ class CancelToken {
   struct State {
     std::atomic<bool> cancelled{false};
     std::atomic<int64_t> deadline_ns{0};
+    std::shared_ptr<const State> parent;  // WithDeadline's token
   };
   std::shared_ptr<State> state_;
 };

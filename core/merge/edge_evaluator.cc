@@ -95,7 +95,18 @@ void LazyEdgeEvaluator::CheckEdges(const std::vector<int>& edge_ids, EdgeProof n
       edge.report = std::move(previous);
       throw;
     }
-    // A re-check for clearance keeps counting what the first check cost.
+    // What the earlier check found and this one did not ask for stays: advancement's outcome,
+    // and a profile (a re-check for advancement alone, on a profiled motion).
+    if (edge.report.advancement == Advancement::kUnknown) {
+      edge.report.advancement = previous.advancement;
+    }
+    if (previous.has_clearance && !edge.report.has_clearance &&
+        edge.report.state == EdgeState::kValid) {
+      edge.report.has_clearance = true;
+      edge.report.profile = std::move(previous.profile);
+      edge.report.certified = edge.report.certified || previous.certified;
+    }
+    // A re-check keeps counting what the first check cost.
     if (previous.state != EdgeState::kUnchecked) {
       edge.report.collision_checks += previous.collision_checks;
       edge.report.distance_queries += previous.distance_queries;

@@ -241,7 +241,8 @@ SearchResult HybridizationSession::SearchBest(const Measure& measure, EdgeProof 
                                               const CancelToken& cancel, MergeResult* result,
                                               int64_t* rechecked) {
   PrepareBounds(measure, cancel, result);
-  SearchView view(graph_, evidence_, measure, Evaluator(), options_.check_mode);
+  const bool refuse_stalled = finish == EdgeProof::kCertificateOrGiveUp;
+  SearchView view(graph_, evidence_, measure, Evaluator(), options_.check_mode, refuse_stalled);
   std::vector<double> cost_to_go;
   if (measure.cost_per_distance() > 0) {
     cost_to_go.resize(graph_.num_nodes());
@@ -284,7 +285,8 @@ SearchResult HybridizationSession::SearchBest(const Measure& measure, EdgeProof 
     bool still_valid = true;
     for (int e : rechecked_edges) {
       const EdgeReport& report = graph_.edge(e).report;
-      still_valid = still_valid && report.state == EdgeState::kValid && Usable(report);
+      still_valid = still_valid && report.state == EdgeState::kValid &&
+                    UsableBy(report, options_.check_mode, refuse_stalled);
     }
     if (still_valid) return best;
   }
@@ -292,18 +294,16 @@ SearchResult HybridizationSession::SearchBest(const Measure& measure, EdgeProof 
 
 EdgeProof HybridizationSession::FinishProof(const Measure& measure) const {
   if (measure.needs_clearance()) return EdgeProof::kProfile;
-  return options_.check_mode == CheckMode::kSampled ? EdgeProof::kSamples
-                                                    : EdgeProof::kCertificate;
+  return options_.check_mode == CheckMode::kSampled ? EdgeProof::kSamples : EdgeProof::kCertificate;
 }
 
 bool HybridizationSession::Usable(const EdgeReport& report) const {
-  return options_.check_mode == CheckMode::kSampled ? report.usable_at_samples()
-                                                    : report.usable();
+  return options_.check_mode == CheckMode::kSampled ? report.usable_at_samples() : report.usable();
 }
 
 bool HybridizationSession::FinishHolds(const SearchResult& path, const Measure& measure,
-                                       const ProgressCallback& progress,
-                                       const CancelToken& cancel, int64_t* rechecked) {
+                                       const ProgressCallback& progress, const CancelToken& cancel,
+                                       int64_t* rechecked) {
   bool holds = true;
   for (int e : FinishPath(path, FinishProof(measure), progress, cancel, rechecked)) {
     const EdgeReport& report = graph_.edge(e).report;
@@ -329,9 +329,12 @@ std::vector<int> HybridizationSession::FinishPath(const SearchResult& best, Edge
   std::vector<int> recheck;
   for (int e : best.edges) {
     const EdgeReport& report = graph_.edge(e).report;
-    const bool lacks = finish == EdgeProof::kProfile   ? !report.has_clearance
-                       : finish == EdgeProof::kSamples ? report.state == EdgeState::kUnchecked
-                                                       : !report.certified;
+    const bool lacks =
+        finish == EdgeProof::kProfile   ? !report.has_clearance
+        : finish == EdgeProof::kSamples ? report.state == EdgeState::kUnchecked
+        : finish == EdgeProof::kCertificateOrGiveUp
+            ? report.state != EdgeState::kInvalid && report.advancement == Advancement::kUnknown
+            : !report.certified;
     if (lacks) recheck.push_back(e);
   }
   if (finish == EdgeProof::kProfile) Evaluator().ProbeProfileGrids(recheck, cancel);
@@ -455,8 +458,8 @@ MergeResult HybridizationSession::Query(const MeasureSpec& spec, const ProgressC
   // The optimum is certified first (with CheckMode::kSampled, checked at its samples); the
   // profiles, which only the report needs under a measure that does not search by clearance, are
   // computed for the final path when it asks for them (MergeOptions::report_clearance).
-  SearchResult best = SearchBest(*measure, FinishProof(*measure), progress, cancel, &result,
-                                 &rechecked);
+  SearchResult best =
+      SearchBest(*measure, FinishProof(*measure), progress, cancel, &result, &rechecked);
   result.hgraph_objective = measure->Objective(EvaluateEdges(graph_, best.edges, spec.k));
   if (PostOptimizer::Applies(options_, *measure)) {
     best = PostOptimizer(*this, *measure, progress, cancel, &result, &rechecked, optimize_until)

@@ -72,6 +72,12 @@ struct MergeOptions {
   // The post-optimization's progress events carry their path (Progress::path; see merge.proto
   // MergeOptions.progress_paths).
   bool progress_paths = false;
+  // Under length with certified checks, the post-optimization's searches refuse a motion whose
+  // certificate stalls (conservative advancement cannot prove it free: it grazes an obstacle)
+  // instead of profiling it, as its shortcuts do; the search takes another route, and the best
+  // path so far stands. Off: such a motion is profiled, and taken if its profile certifies it.
+  // Not in the API: the benchmark's comparison (hgraph-bench, hgraph-profiled-stalls).
+  bool give_up_stalled = true;
   double endpoint_tolerance = kEndpointTolerance;
   int threads = 0;  // worker threads; 0 = all cores
   // > 0: input edges longer than this are subdivided in the H-Graph (see HGraph); 0 = off.
@@ -112,6 +118,7 @@ struct MergeStats {
   int64_t node_clearances = 0;  // node clearances computed for the lazy bounds
   int64_t optimize_rounds = 0;  // post-optimization rounds
   int64_t shortcuts = 0;        // shortcuts the post-optimization accepted
+  int64_t shortcut_checks = 0;  // motions its shortcuts checked (accepted or not)
   OptimizeStop optimize_stop = OptimizeStop::kOff;
   int threads = 0;
   int alignments = 0;
@@ -217,7 +224,9 @@ class HybridizationSession {
   void FillShape(int nodes, int edges, MergeStats* stats) const;
   // The best path under `measure` with every edge checked, and then certified (`finish`
   // kCertificate) or also profiled (kClearance, so that every measure can be reported), or with
-  // kSamples left at the samples its lazy search checked (CheckMode::kSampled). The
+  // kSamples left at the samples its lazy search checked (CheckMode::kSampled); with
+  // kCertificateOrGiveUp certified by advancement alone, a motion where it stalls refused (the
+  // post-optimization's searches, MergeOptions::give_up_stalled). The
   // certificate can find a collision a sampled check missed, or fail where a motion grazes an
   // obstacle; then the search runs again. Adds to the result's stats and timing.
   SearchResult SearchBest(const Measure& measure, EdgeProof finish,

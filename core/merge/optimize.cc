@@ -46,6 +46,7 @@ PostOptimizer::PostOptimizer(HybridizationSession& session, const Measure& measu
       measure_(measure),
       progress_(progress),
       cancel_(cancel),
+      round_cancel_(cancel),
       result_(result),
       rechecked_(rechecked),
       until_(until) {}
@@ -74,9 +75,21 @@ SearchResult PostOptimizer::Run(SearchResult best) {
   reach_ = NewNodeReach(graph_, session_.checker_->space(), session_.candidates_.radius);
   objective_ = measure_.Objective(EvaluateEdges(graph_, best.edges, measure_.spec().k));
   found_ = std::move(best);
+  if (budget_ms_ >= 0) {
+    budget_end_ = started_ + std::chrono::duration_cast<Clock::duration>(
+                                 std::chrono::duration<double, std::milli>(budget_ms_));
+    round_cancel_ = cancel_.WithDeadline(*budget_end_);
+  }
   Stream();
-  ShortenTheBest();
-  Restart();
+  try {
+    ShortenTheBest();
+    Restart();
+  } catch (const Error& e) {
+    // The budget ended inside a round: the best path so far stands, certified (a round's
+    // checks add facts to the H-Graph as they finish; an unfinished one adds nothing).
+    if (!BudgetStop(e)) throw;
+    result_->stats.optimize_stop = budget_stop_;
+  }
   result_->timing.optimize_ms += MsSince(started_);
   return std::move(found_);
 }
@@ -115,9 +128,12 @@ void PostOptimizer::Stream() {
                      .path = std::move(path)});
 }
 
+double PostOptimizer::ObjectiveOf(const SearchResult& path) const {
+  return measure_.Objective(EvaluateEdges(graph_, path.edges, measure_.spec().k));
+}
+
 bool PostOptimizer::Take(SearchResult next) {
-  const double next_objective =
-      measure_.Objective(EvaluateEdges(graph_, next.edges, measure_.spec().k));
+  const double next_objective = ObjectiveOf(next);
   const bool improved = next_objective < objective_ * (1 - kOptimizeMinGain);
   if (next_objective < objective_) {
     found_ = std::move(next);
@@ -129,9 +145,20 @@ bool PostOptimizer::Take(SearchResult next) {
 
 SearchResult PostOptimizer::Search() {
   // Under safe length the search may take an edge whose clearance floor proves the safety
-  // without a profile; the profile makes the objective known.
-  return session_.SearchBest(measure_, session_.FinishProof(measure_), progress_, cancel_, result_,
-                             rechecked_);
+  // without a profile; the profile makes the objective known. Under length (certified) a motion
+  // whose certificate stalls is refused, not profiled (MergeOptions::give_up_stalled): a
+  // profile costs hundreds of distance queries, and the rounds have other routes to try. The
+  // best path so far may hold such motions (profiled by the first search); where no route is
+  // left without them, it stands.
+  const bool give_up = TakesAsItIs() && session_.options_.give_up_stalled;
+  try {
+    return session_.SearchBest(
+        measure_, give_up ? EdgeProof::kCertificateOrGiveUp : session_.FinishProof(measure_),
+        progress_, round_cancel_, result_, rechecked_);
+  } catch (const Error& e) {
+    if (!give_up || e.code() != ErrorCode::kFailedPrecondition) throw;
+    return found_;
+  }
 }
 
 void PostOptimizer::Keep(int a, int b, const EdgeReport& report) {
@@ -141,7 +168,7 @@ void PostOptimizer::Keep(int a, int b, const EdgeReport& report) {
 ShortcutResult PostOptimizer::Shorten(const std::vector<int>& ids,
                                       const std::vector<EdgeReport>& edges, bool polishing,
                                       bool lazy) {
-  cancel_.ThrowIfStopped();
+  round_cancel_.ThrowIfStopped();
   ++round_;
   const MeasureSpec& spec = measure_.spec();
   ShortcutRequest request{.path = {.name = "shortcut"},
@@ -158,7 +185,8 @@ ShortcutResult PostOptimizer::Shorten(const std::vector<int>& ids,
                           .known = [this](int a, int b) -> const EdgeReport* {
                             const int e = graph_.FindEdge(a, b);
                             return e < 0 ? nullptr : &graph_.edge(e).report;
-                          }};
+                          },
+                          .until = budget_end_};
   for (int n : ids) request.path.waypoints.push_back(graph_.node(n).q);
   ShortcutResult shortcut = ShortcutCertified(*session_.checker_, request, cancel_);
   *rechecked_ += shortcut.edges_checked;
@@ -166,6 +194,7 @@ ShortcutResult PostOptimizer::Shorten(const std::vector<int>& ids,
   for (const auto& [a, b, report] : shortcut.id_checks) Keep(a, b, report);
   if (shortcut.accepted == 0) return shortcut;
   result_->stats.shortcuts += shortcut.accepted;
+  result_->stats.shortcut_checks += shortcut.edges_checked;
   std::vector<int> fresh;
   for (size_t j = 0; j < shortcut.ids.size(); ++j) {
     if (shortcut.ids[j] >= 0) continue;
@@ -185,6 +214,35 @@ ShortcutResult PostOptimizer::Shorten(const std::vector<int>& ids,
     }
   }
   return shortcut;
+}
+
+bool PostOptimizer::BudgetEnded() const { return budget_end_ && Clock::now() >= *budget_end_; }
+
+bool PostOptimizer::BudgetStop(const Error& e) const {
+  return e.code() == ErrorCode::kDeadlineExceeded && !cancel_.stopped() && BudgetEnded();
+}
+
+bool PostOptimizer::TakesAsItIs() const {
+  return measure_.spec().type == MeasureType::kLength &&
+         session_.options_.check_mode == CheckMode::kCertified;
+}
+
+SearchResult PostOptimizer::AsItIs(const ShortcutResult& shortcut) {
+  // Every edge of a shortened path is proven free (the shortcuts, the cuts) or a piece of one.
+  // A sampled merge's pieces of motions checked at their samples are checked at their own (a
+  // search instead, if one is in collision).
+  SearchResult next;
+  next.found = true;
+  for (int id : shortcut.ids) {
+    if (!next.nodes.empty() && next.nodes.back() == id) continue;
+    if (!next.nodes.empty()) next.edges.push_back(graph_.FindEdge(next.nodes.back(), id));
+    next.nodes.push_back(id);
+  }
+  if (session_.options_.check_mode == CheckMode::kSampled &&
+      !session_.FinishHolds(next, measure_, progress_, round_cancel_, rechecked_)) {
+    next = Search();
+  }
+  return next;
 }
 
 template <typename OneRound>
@@ -212,23 +270,23 @@ void PostOptimizer::ShortenTheBest() {
     for (int e : found_.edges) edges.push_back(graph_.edge(e).report);
     const ShortcutResult shortcut = Shorten(found_.nodes, edges, polishing, false);
     if (shortcut.accepted == 0) return false;
+    // Once the budget has ended the search has no time left: under length the shortened path
+    // is taken as it is, as a polished one always is.
+    if (polishing || (BudgetEnded() && TakesAsItIs())) return Take(AsItIs(shortcut));
     SearchResult next;
-    if (polishing) {
-      // The polished path itself: every edge proven free (the cuts) or a piece of one. A sampled
-      // merge's pieces of motions checked at their samples are checked at their own (a search
-      // instead, if one is in collision).
-      next.found = true;
-      for (int id : shortcut.ids) {
-        if (!next.nodes.empty() && next.nodes.back() == id) continue;
-        if (!next.nodes.empty()) next.edges.push_back(graph_.FindEdge(next.nodes.back(), id));
-        next.nodes.push_back(id);
-      }
-      if (session_.options_.check_mode == CheckMode::kSampled &&
-          !session_.FinishHolds(next, measure_, progress_, cancel_, rechecked_)) {
-        next = Search();
-      }
-    } else {
+    try {
       next = Search();
+    } catch (const Error& e) {
+      // The budget ended during the search: the round's shortcuts still count.
+      if (!BudgetStop(e) || !TakesAsItIs()) throw;
+      Take(AsItIs(shortcut));
+      throw;
+    }
+    // A search that refuses stalled motions misses the shortened path where it keeps one of
+    // the best path's motions that only a profile certified: the shorter of the two is taken.
+    if (TakesAsItIs() && session_.options_.give_up_stalled) {
+      SearchResult as_is = AsItIs(shortcut);
+      if (ObjectiveOf(as_is) < ObjectiveOf(next)) next = std::move(as_is);
     }
     return Take(std::move(next));
   });
@@ -279,7 +337,7 @@ void PostOptimizer::Restart() {
       edges = std::move(shortcut.edges);
       return gained;
     });
-    cancel_.ThrowIfStopped();
+    round_cancel_.ThrowIfStopped();
     Take(Search());
   }
 }

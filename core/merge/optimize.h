@@ -59,6 +59,15 @@ class PostOptimizer {
   // (length only: under safe length a cut's pieces would need profiles of their own).
   template <typename OneRound>
   void RunRounds(const OneRound& one_round);
+  // Whether the budget in time has ended; whether `e` is what its end threw (not the caller's
+  // stop); whether a shortened path may be taken without a search (length, certified).
+  bool BudgetEnded() const;
+  bool BudgetStop(const Error& e) const;
+  bool TakesAsItIs() const;
+  // The measure's objective of a path of the H-Graph.
+  double ObjectiveOf(const SearchResult& path) const;
+  // The path a round of shortcuts made, as a search result over the H-Graph it joined.
+  SearchResult AsItIs(const ShortcutResult& shortcut);
   // Rounds of the best path, each re-hybridized (a polished path is taken as it is).
   void ShortenTheBest();
   // Restarts from the input paths (MergeOptions::optimize_restarts).
@@ -71,6 +80,10 @@ class PostOptimizer {
   const Measure& measure_;
   const ProgressCallback& progress_;
   const CancelToken& cancel_;
+  // The caller's token, with the budget's end as a deadline of its own when there is a budget in
+  // time: a round (its shortcuts, its search) stops there, not after it.
+  CancelToken round_cancel_;
+  std::optional<Clock::time_point> budget_end_;
   MergeResult* result_;
   int64_t* rechecked_;
   std::optional<Clock::time_point> until_;

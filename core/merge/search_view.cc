@@ -5,12 +5,13 @@
 namespace hgraph {
 
 SearchView::SearchView(const HGraph& graph, const EdgeEvidence& evidence, const Measure& measure,
-                       LazyEdgeEvaluator evaluator, CheckMode check_mode)
+                       LazyEdgeEvaluator evaluator, CheckMode check_mode, bool refuse_stalled)
     : graph_(graph),
       evidence_(evidence),
       measure_(measure),
       evaluator_(evaluator),
       check_mode_(check_mode),
+      refuse_stalled_(refuse_stalled),
       seen_(graph.num_edges()),
       seen_now_(graph.num_edges(), 0) {}
 
@@ -28,8 +29,13 @@ void SearchView::Forget(const std::vector<int>& edges) {
   for (int e : edges) seen_now_[e] = 0;
 }
 
+bool UsableBy(const EdgeReport& report, CheckMode check_mode, bool refuse_stalled) {
+  if (refuse_stalled && report.advancement == Advancement::kStalled) return false;
+  return check_mode == CheckMode::kSampled ? report.usable_at_samples() : report.usable();
+}
+
 bool SearchView::Usable(const EdgeReport& report) const {
-  return check_mode_ == CheckMode::kSampled ? report.usable_at_samples() : report.usable();
+  return UsableBy(report, check_mode_, refuse_stalled_);
 }
 
 bool SearchView::Exact(int e) const {

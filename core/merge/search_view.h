@@ -18,12 +18,18 @@ namespace hgraph {
 // looks at an edge once per node it settles next to it, and a bound scans the edge's probes.
 // Lives for one search of an H-Graph that does not grow meanwhile; not copyable (the functions
 // it hands out point to it); not thread safe.
+// Whether a search may take the motion: usable (EdgeReport::usable, or usable_at_samples with
+// CheckMode::kSampled), and with `refuse_stalled` not a motion whose advancement stalled.
+bool UsableBy(const EdgeReport& report, CheckMode check_mode, bool refuse_stalled);
+
 class SearchView {
  public:
   // With CheckMode::kSampled a profile without a certificate is usable
-  // (EdgeReport::usable_at_samples).
+  // (EdgeReport::usable_at_samples). With `refuse_stalled` (a search finished with
+  // EdgeProof::kCertificateOrGiveUp) a motion whose advancement stalled is not, whatever a
+  // profile found for another query says (UsableBy).
   SearchView(const HGraph& graph, const EdgeEvidence& evidence, const Measure& measure,
-             LazyEdgeEvaluator evaluator, CheckMode check_mode);
+             LazyEdgeEvaluator evaluator, CheckMode check_mode, bool refuse_stalled = false);
   SearchView(const SearchView&) = delete;
   SearchView& operator=(const SearchView&) = delete;
 
@@ -44,6 +50,7 @@ class SearchView {
   const Measure& measure_;
   LazyEdgeEvaluator evaluator_;
   CheckMode check_mode_;
+  bool refuse_stalled_;
   std::vector<SearchEdge> seen_;
   std::vector<char> seen_now_;
 };

@@ -46,7 +46,8 @@ EdgeReport Piece(const Space& space, const EdgeReport& whole, const Config& from
   const bool certified = whole.certified && !whole.has_clearance;
   return EdgeReport{.state = sampled && !certified ? EdgeState::kUnchecked : whole.state,
                     .length = space.Distance(from, to),
-                    .certified = certified};
+                    .certified = certified,
+                    .advancement = certified ? whole.advancement : Advancement::kUnknown};
 }
 
 double PathLength(const std::vector<EdgeReport>& edges) {
@@ -113,6 +114,12 @@ class Shortening {
     int checks = 0;
   };
 
+  // Past the request's `until`: nothing new is started.
+  bool OutOfTime() const {
+    return request_.until && std::chrono::steady_clock::now() >= *request_.until;
+  }
+  // Whether CheckMotion gives up where a certificate stalls (EdgeProof::kCertificateOrGiveUp).
+  bool GivesUp() const { return request_.safety <= 0 && !lazy_ && !request_.sampled; }
   EdgeReport CheckMotion(const Config& a, const Config& b) const {
     return Check(checker_, a, b, request_.safety, lazy_ || request_.sampled);
   }
@@ -190,7 +197,7 @@ void Shortening::DropWaypoints() {
   // and drops those whose check passed, left to right, never two neighbours (the second one's
   // check joined a waypoint the first one removed); a drop unsettles the neighbours.
   std::vector<char> settled(q_.size(), request_.corners_only ? 1 : 0);
-  for (;;) {
+  while (!OutOfTime()) {
     cancel_.ThrowIfStopped();
     std::vector<size_t> tried;
     for (size_t j = 1; j + 1 < q_.size(); ++j) {
@@ -235,10 +242,23 @@ std::vector<EdgeReport> Shortening::JoinNeighbours(const std::vector<size_t>& tr
     const size_t j = tried[k];
     if (!request_.known || ids_[j - 1] < 0 || ids_[j + 1] < 0) continue;
     const EdgeReport* known = request_.known(ids_[j - 1], ids_[j + 1]);
-    // Taken when it settles the question: free, or not free whatever the safety.
+    // Taken when it settles the question: free, or not free whatever the safety. Where the check
+    // would give up on a stalled certificate, a known motion answers as that check would: by
+    // what advancement concluded on it (a profile's certificate, found for another query, would
+    // make the answer depend on what was asked before).
     if (known == nullptr || (!MayTake(*known) && known->state != EdgeState::kInvalid &&
                              (request_.sampled ? known->usable_at_samples() : known->usable()))) {
       continue;
+    }
+    if (GivesUp() && known->state == EdgeState::kValid) {
+      if (known->advancement == Advancement::kUnknown) continue;
+      if (known->advancement == Advancement::kStalled) {
+        joined[k] = EdgeReport{.state = EdgeState::kValid,
+                               .length = known->length,
+                               .advancement = Advancement::kStalled};
+        (*from_caller)[k] = 1;
+        continue;
+      }
     }
     joined[k] = *known;
     (*from_caller)[k] = 1;
@@ -275,7 +295,7 @@ void Shortening::TryRandomPairs() {
       : request_.attempts > 0
           ? request_.attempts
           : std::max(kMinAttempts, kAttemptsPerWaypoint * static_cast<int>(q_.size()));
-  for (int attempt = 0; attempt < attempts && q_.size() >= 2;) {
+  for (int attempt = 0; attempt < attempts && q_.size() >= 2 && !OutOfTime();) {
     cancel_.ThrowIfStopped();
     if (PathLength(edges_) <= 0) break;
     std::vector<Candidate> batch = DrawBatch(attempts, &attempt);
@@ -441,7 +461,7 @@ std::vector<Shortening::Cut> Shortening::FindCuts() const {
   const double least_gain = kMinCornerGain * PathLength(edges_);
   ParallelFor(threads_, q_.size() - 2, [&](size_t k) {
     const size_t j = k + 1;
-    if (cancel_.stopped()) return;
+    if (cancel_.stopped() || OutOfTime()) return;
     for (double f = 0.5; f >= kMinCornerCut; f /= 2) {
       Cut& cut = cuts[j];
       cut.f = f;

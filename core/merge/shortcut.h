@@ -7,8 +7,10 @@
 // valid at their samples (ShortcutRequest::sampled, a sampled merge).
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <tuple>
 #include <vector>
 
@@ -67,6 +69,9 @@ struct ShortcutRequest {
   // knows it (an H-Graph edge); nullptr when it does not. Only a report that is invalid, or
   // valid and certified (lazy, sampled: valid), is taken instead of a check. May be empty.
   std::function<const EdgeReport*(int a, int b)> known;
+  // A budget's end: no pass of waypoint drops, batch of random pairs or corner cut starts after
+  // it, and the result holds what was taken before (unlike a stopped token, which throws).
+  std::optional<std::chrono::steady_clock::time_point> until;
 };
 
 struct ShortcutResult {

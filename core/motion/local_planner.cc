@@ -2,6 +2,7 @@
 
 #include <tbb/enumerable_thread_specific.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -40,6 +41,33 @@ std::vector<int> BisectionOrder(int segments) {
 
 }  // namespace
 
+namespace {
+
+// Per robot body, what bounds how far its points move when its frame turns: its radius about the
+// frame's origin (CollisionWorld::BodyRadius), and the points whose convex hull holds it, in the
+// frame (a mesh's vertices, a box's corners; none for a sphere or a cylinder, which keep the
+// radius).
+struct RobotReach {
+  std::vector<double> radius;
+  std::vector<std::vector<Eigen::Vector3d>> points;
+};
+
+std::vector<Eigen::Vector3d> ExtremePoints(const RobotBody& body) {
+  std::vector<Eigen::Vector3d> points;
+  if (body.shape.type == ShapeType::kMesh) {
+    for (const Eigen::Vector3d& v : body.shape.mesh->vertices) points.push_back(body.offset * v);
+  } else if (body.shape.type == ShapeType::kBox) {
+    for (int corner = 0; corner < 8; ++corner) {
+      const Eigen::Vector3d p(corner & 1 ? 0.5 : -0.5, corner & 2 ? 0.5 : -0.5,
+                              corner & 4 ? 0.5 : -0.5);
+      points.push_back(body.offset * p.cwiseProduct(body.shape.box_size));
+    }
+  }
+  return points;
+}
+
+}  // namespace
+
 struct LocalPlanner::Impl {
   CollisionContext& Context(const CollisionWorld& world) {
     std::unique_ptr<CollisionContext>& context = contexts.local();
@@ -52,19 +80,43 @@ struct LocalPlanner::Impl {
   std::atomic<int64_t> distance_queries{0};
   std::atomic<int64_t> bound_queries{0};
   std::vector<int> body_component;
-  std::vector<double> body_radius;
+  RobotReach reach;
 };
 
 namespace {
 
+// Below this angle a motion's rotation axis is not used (the radius about the frame's origin
+// bounds the turn instead: Eigen's slerp interpolates linearly there, and the turn is tiny).
+constexpr double kAxisMinAngle = 1e-4;
+
+// The largest distance of the points from the axis through the origin (`axis` a unit vector),
+// at most `radius`, rounded up.
+double RadiusAbout(const std::vector<Eigen::Vector3d>& points, const Eigen::Vector3d& axis,
+                   double radius) {
+  double farthest = 0;
+  for (const Eigen::Vector3d& p : points)
+    farthest = std::max(farthest, axis.cross(p).squaredNorm());
+  return std::min(radius, std::sqrt(farthest) + 1e-9 * radius);
+}
+
 // How far any point of the robot can move along the straight motion from a to b: per body, its
-// component's translation plus its radius times the component's rotation angle.
+// component's translation plus the component's rotation angle times the body's distance from
+// the rotation's axis. A straight motion turns the frame about one axis fixed in the frame
+// (slerp; SO(2): the z axis), so a point p of the body moves at most |dx| + angle |axis x p|:
+// for an elongated body turning about its long axis far less than its radius about the origin.
 double RobotMotionBound(const Space& space, const std::vector<int>& body_component,
-                        const std::vector<double>& body_radius, const Config& a, const Config& b) {
+                        const RobotReach& reach, const Config& a, const Config& b) {
   double bound = 0;
   for (size_t i = 0; i < body_component.size(); ++i) {
     const int c = body_component[i];
-    bound += space.TranslationDistance(c, a, b) + body_radius[i] * space.RotationAngle(c, a, b);
+    const double angle = space.RotationAngle(c, a, b);
+    double radius = reach.radius[i];
+    if (angle > kAxisMinAngle && !reach.points[i].empty()) {
+      const Eigen::Matrix3d turn =
+          space.Pose(c, a).linear().transpose() * space.Pose(c, b).linear();
+      radius = RadiusAbout(reach.points[i], Eigen::AngleAxisd(turn).axis(), radius);
+    }
+    bound += space.TranslationDistance(c, a, b) + radius * angle;
   }
   return bound;
 }
@@ -72,14 +124,14 @@ double RobotMotionBound(const Space& space, const std::vector<int>& body_compone
 // One CheckEdge call: the motion, the thread's context and what it has found so far.
 class EdgeCheck {
  public:
-  EdgeCheck(const Space& space, const std::vector<int>& body_component,
-            const std::vector<double>& body_radius, CollisionContext& context, const Config& from,
-            const Config& to, const CancelToken* cancel, const ClearanceBound* bound = nullptr,
+  EdgeCheck(const Space& space, const std::vector<int>& body_component, const RobotReach& reach,
+            CollisionContext& context, const Config& from, const Config& to,
+            const CancelToken* cancel, const ClearanceBound* bound = nullptr,
             std::atomic<int64_t>* bound_total = nullptr, double rel_err = 0, bool threshold = false,
             bool warm_start = false)
       : space_(space),
         body_component_(body_component),
-        body_radius_(body_radius),
+        reach_(reach),
         context_(context),
         from_(from),
         to_(to),
@@ -173,7 +225,7 @@ class EdgeCheck {
   }
 
   double MotionBound(const Config& a, const Config& b) const {
-    return RobotMotionBound(space_, body_component_, body_radius_, a, b);
+    return RobotMotionBound(space_, body_component_, reach_, a, b);
   }
 
   // Certifies the stretch between two profile samples, halving it while the certificate fails,
@@ -303,7 +355,7 @@ class EdgeCheck {
  private:
   const Space& space_;
   const std::vector<int>& body_component_;
-  const std::vector<double>& body_radius_;
+  const RobotReach& reach_;
   CollisionContext& context_;
   const Config& from_;
   const Config& to_;
@@ -319,7 +371,7 @@ class EdgeCheck {
   // A sample with the motion bound of the whole edge, times max(t, 1 - t), as clearance covers
   // it alone with advancement's margin (0.999) to spare.
   static constexpr double kCapMargin = 1.01;
-  static constexpr int64_t kCancelStride = 256;
+  static constexpr int64_t kCancelStride = 16;
   bool certified_ = true;
   double invalid_at_ = -1;
   int64_t bound_queries_ = 0;
@@ -344,7 +396,8 @@ LocalPlanner::LocalPlanner(std::shared_ptr<const CollisionWorld> world, LocalPla
   const Scene& scene = world_->scene();
   for (size_t i = 0; i < scene.robot.size(); ++i) {
     impl_->body_component.push_back(scene.robot[i].component);
-    impl_->body_radius.push_back(world_->BodyRadius(static_cast<int>(i)));
+    impl_->reach.radius.push_back(world_->BodyRadius(static_cast<int>(i)));
+    impl_->reach.points.push_back(ExtremePoints(scene.robot[i]));
   }
 }
 
@@ -405,7 +458,7 @@ EdgeReport LocalPlanner::CheckEdge(const EdgeCheckRequest& request) const {
   // Three stages, each skipped where the request knows or does not ask for its answer: the
   // samples at the resolution, conservative advancement for a certificate, the profile.
   const int segments = SampleCount(report.length) - 1;
-  EdgeCheck check(s, impl_->body_component, impl_->body_radius, context, from, to, request.cancel,
+  EdgeCheck check(s, impl_->body_component, impl_->reach, context, from, to, request.cancel,
                   nullptr, nullptr, 0, false, options_.warm_start);
   if (!request.known.samples_valid) {
     const double t = check.FirstInvalidSample(segments, request.known);
@@ -414,16 +467,18 @@ EdgeReport LocalPlanner::CheckEdge(const EdgeCheckRequest& request) const {
   report.state = EdgeState::kValid;
   if (request.proof == EdgeProof::kSamples) return finish();
   if (request.proof != EdgeProof::kProfile) {
-    EdgeCheck advance(s, impl_->body_component, impl_->body_radius, context, from, to,
-                      request.cancel, options_.clearance_bound.get(), &impl_->bound_queries,
+    EdgeCheck advance(s, impl_->body_component, impl_->reach, context, from, to, request.cancel,
+                      options_.clearance_bound.get(), &impl_->bound_queries,
                       options_.certificate_rel_err, options_.certificate_threshold,
                       options_.warm_start);
     const EdgeCheck::Advanced advanced = advance.Advance(segments);
     if (advanced.invalid_at >= 0) return invalid(advanced.invalid_at);
     if (advanced.certified) {
       report.certified = true;
+      report.advancement = Advancement::kCertified;
       return finish();
     }
+    report.advancement = Advancement::kStalled;
     if (request.proof == EdgeProof::kCertificateOrGiveUp) return finish();
   }
   if (!check.Profile(segments, request.known.clearances, &report.profile)) {
@@ -478,7 +533,7 @@ void LocalPlanner::LowerToWitnesses(const Config& from, const Config& to,
 }
 
 double LocalPlanner::MotionBound(const Config& a, const Config& b) const {
-  return RobotMotionBound(space(), impl_->body_component, impl_->body_radius, a, b);
+  return RobotMotionBound(space(), impl_->body_component, impl_->reach, a, b);
 }
 
 std::vector<ClearanceSample> LocalPlanner::ProbeClearance(

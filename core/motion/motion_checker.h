@@ -21,6 +21,11 @@ struct ClearanceSample {
   double clearance = 0;
 };
 
+// What conservative advancement (EdgeProof::kCertificate's first stage) concluded on a motion:
+// not run, it certified the motion, or it stalled (its steps would shrink below the profile's
+// finest refinement) on a motion valid at its samples. A fact of the motion alone.
+enum class Advancement : int8_t { kUnknown, kCertified, kStalled };
+
 // What the local planner found about one straight motion. Stored on the H-Graph edge, so that
 // any measure can be evaluated later without checking again.
 struct EdgeReport {
@@ -35,6 +40,7 @@ struct EdgeReport {
   // because the two clearances add up to more than any robot point can move along the stretch.
   // False means the motion was only checked at the samples (see core/motion/local_planner.h).
   bool certified = false;
+  Advancement advancement = Advancement::kUnknown;
   int64_t collision_checks = 0;
   int64_t distance_queries = 0;
 

@@ -12,6 +12,7 @@
 #include <thread>
 #include <vector>
 
+#include "core/adapter/scene_proto.h"
 #include "core/common/error.h"
 #include "core/common/limits.h"
 #include "core/common/progress.h"
@@ -240,6 +241,70 @@ TEST(LocalPlannerTest, ThinObstacleMissedBySamplesIsCaughtByRefinement) {
   EXPECT_DOUBLE_EQ(refined.invalid_at, 0.25);
   EXPECT_FALSE(refined.has_clearance);
   EXPECT_FALSE(refined.certified);
+}
+
+// MotionBound on random motions of robots that turn (SE(2) and SE(3) meshes, the circle world's
+// off-centre box): every point of the robot's hull (mesh vertices, box corners) travels no farther
+// than the bound, measured along its path in 400 steps; and the bound, which uses the distance
+// from each motion's rotation axis, is below the radius about the frame's origin on most
+// motions that turn, so that certificates take longer steps.
+TEST(LocalPlannerTest, MotionBoundCoversEveryPointsPathAndUsesTheTurnsAxis) {
+  const std::string root = HGRAPH_SOURCE_DIR;
+  std::vector<std::shared_ptr<const CollisionWorld>> worlds = {CircleWorld()};
+  for (const char* name : {"home", "twisty", "car_maze"}) {
+    worlds.push_back(std::make_shared<const CollisionWorld>(
+        LoadSceneFile(root + "/tests/bench/scenes/" + name + "/scene.json")));
+  }
+  for (const auto& world : worlds) {
+    SCOPED_TRACE(world->scene().name);
+    const LocalPlanner planner(world, {});
+    const Space& space = world->space();
+    std::vector<std::vector<Eigen::Vector3d>> hull;
+    for (const RobotBody& body : world->scene().robot) {
+      hull.emplace_back();
+      if (body.shape.type == ShapeType::kMesh) {
+        hull.back() = body.shape.mesh->vertices;
+      } else if (body.shape.type == ShapeType::kBox) {
+        for (int corner = 0; corner < 8; ++corner) {
+          hull.back().push_back(Eigen::Vector3d(corner & 1 ? 0.5 : -0.5, corner & 2 ? 0.5 : -0.5,
+                                                corner & 4 ? 0.5 : -0.5)
+                                    .cwiseProduct(body.shape.box_size));
+        }
+      }
+    }
+    std::mt19937_64 rng(7);
+    int tighter = 0;
+    constexpr int kMotions = 60;
+    for (int m = 0; m < kMotions; ++m) {
+      const Config a = space.Sample(rng);
+      // Short and long turns, both ways round.
+      const Config b = space.Interpolate(a, space.Sample(rng), m % 2 ? 0.1 : 1.0);
+      const double bound = planner.MotionBound(a, b);
+      double radius_bound = 0;
+      for (size_t i = 0; i < hull.size(); ++i) {
+        const int c = world->scene().robot[i].component;
+        radius_bound += space.TranslationDistance(c, a, b) +
+                        world->BodyRadius(static_cast<int>(i)) * space.RotationAngle(c, a, b);
+      }
+      EXPECT_LE(bound, radius_bound * (1 + 1e-12) + 1e-12);
+      if (bound < radius_bound * (1 - 1e-3)) ++tighter;
+      constexpr int kSteps = 400;
+      for (size_t i = 0; i < hull.size(); ++i) {
+        std::vector<double> travelled(hull[i].size(), 0);
+        Eigen::Isometry3d previous = world->BodyPose(static_cast<int>(i), a);
+        for (int k = 1; k <= kSteps; ++k) {
+          const Eigen::Isometry3d pose =
+              world->BodyPose(static_cast<int>(i), space.Interpolate(a, b, k / double(kSteps)));
+          for (size_t v = 0; v < hull[i].size(); ++v) {
+            travelled[v] += (pose * hull[i][v] - previous * hull[i][v]).norm();
+          }
+          previous = pose;
+        }
+        for (double d : travelled) ASSERT_LE(d, bound * (1 + 1e-9) + 1e-12) << "motion " << m;
+      }
+    }
+    EXPECT_GT(tighter, kMotions / 2);
+  }
 }
 
 TEST(LocalPlannerTest, CertifiedEdgesAreFreeWhenCheckedDensely) {

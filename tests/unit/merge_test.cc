@@ -450,6 +450,57 @@ TEST(MergeMeshTest, PartialShortcutsKeepTheInvariants) {
   });
 }
 
+// MergeOptions::optimize_ms on the mesh problems, under length: budgets that end inside the first
+// round (its shortcuts, its search) or in a later one. Wherever the budget ends, the answer is
+// certified, keeps the endpoints and is no worse than the H-Graph's optimum; a budget that ended
+// says so (kTime), one the rounds outlived says why they stopped. Only what stopped the rounds is
+// checked, never how long they took.
+TEST(MergeMeshTest, ABudgetEndingInsideARoundKeepsTheBestCertifiedPath) {
+  ForMeshProblems([](const LocalPlanner& planner, const std::vector<InputPath>& inputs) {
+    for (const double budget_ms : {0.5, 2.0, 8.0, 30.0}) {
+      SCOPED_TRACE(budget_ms);
+      const MergeResult r =
+          Merge(planner, MergeRequest{.paths = inputs, .options = {.optimize_ms = budget_ms}});
+      const InputReport check = CheckPaths(planner, {.paths = {r.path}}).paths.at(0);
+      EXPECT_TRUE(check.valid && check.certified);
+      EXPECT_TRUE(r.path.waypoints.front().isApprox(inputs[0].waypoints.front()));
+      EXPECT_TRUE(r.path.waypoints.back().isApprox(inputs[0].waypoints.back()));
+      EXPECT_LE(r.objective, r.hgraph_objective + 1e-9);
+      EXPECT_NEAR(r.objective, check.quality.length, 1e-6 * check.quality.length);
+      EXPECT_TRUE(r.stats.optimize_stop == OptimizeStop::kTime ||
+                  r.stats.optimize_stop == OptimizeStop::kConverged ||
+                  r.stats.optimize_stop == OptimizeStop::kGrowth)
+          << OptimizeStopName(r.stats.optimize_stop);
+    }
+  });
+}
+
+// MergeOptions::give_up_stalled on the mesh problems (on: with and without restarts): whether the
+// post-optimization's searches refuse motions whose certificate stalls or profile them, the answer
+// is certified, keeps the endpoints and is no worse than the H-Graph's optimum, and the same
+// on one thread as on two.
+TEST(MergeMeshTest, SearchesThatRefuseStalledMotionsKeepTheInvariants) {
+  ForMeshProblems([](const LocalPlanner& planner, const std::vector<InputPath>& inputs) {
+    for (const auto& [give_up, restarts] : {std::pair{true, -1}, {true, 2}, {false, -1}}) {
+      SCOPED_TRACE(::testing::Message() << "give_up " << give_up << ", restarts " << restarts);
+      std::vector<MergeResult> runs;
+      for (const int threads : {1, 2}) {
+        runs.push_back(Merge(planner, MergeRequest{.paths = inputs,
+                                                   .options = {.optimize_restarts = restarts,
+                                                               .give_up_stalled = give_up,
+                                                               .threads = threads}}));
+      }
+      const MergeResult& r = runs[0];
+      const InputReport check = CheckPaths(planner, {.paths = {r.path}}).paths.at(0);
+      EXPECT_TRUE(check.valid && check.certified);
+      EXPECT_TRUE(r.path.waypoints.front().isApprox(inputs[0].waypoints.front()));
+      EXPECT_TRUE(r.path.waypoints.back().isApprox(inputs[0].waypoints.back()));
+      EXPECT_LE(r.objective, r.hgraph_objective + 1e-9);
+      EXPECT_EQ(runs[1].path.waypoints, r.path.waypoints);
+    }
+  });
+}
+
 // Restarts (MergeOptions::optimize_restarts) on the mesh problems, stopped by the automatic
 // budget's rounds, never the clock: none gives the default merge's path; two keep the invariants
 // (certified, the endpoints, never worse than without them, under length and safe length) and give

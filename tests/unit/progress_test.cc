@@ -8,6 +8,8 @@
 #include <cmath>
 #include <vector>
 
+#include "core/common/error.h"
+
 namespace hgraph {
 namespace {
 
@@ -58,6 +60,42 @@ TEST(ThrottledProgressTest, WithoutACallbackDoneDoesNothing) {
   const ProgressCallback none;
   const ThrottledProgress progress(none, "check", 3, std::chrono::steady_clock::now());
   for (int64_t done = 1; done <= 3; ++done) EXPECT_NO_THROW(progress.Done(done, 1, 1));
+}
+
+// CancelToken::WithDeadline: the child stops when its parent is cancelled or its parent's deadline
+// passes, and at its own deadline; neither its deadline nor its Cancel reaches the parent.
+TEST(CancelTokenTest, AChildWithADeadlineStopsWithItsParentButNeverStopsIt) {
+  const auto now = std::chrono::steady_clock::now();
+  const CancelToken parent;
+  const CancelToken passed = parent.WithDeadline(now - std::chrono::seconds(1));
+  EXPECT_TRUE(passed.deadline_passed());
+  EXPECT_FALSE(passed.cancelled());
+  EXPECT_FALSE(parent.stopped());
+  try {
+    passed.ThrowIfStopped();
+    ADD_FAILURE() << "a passed deadline did not throw";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kDeadlineExceeded);
+  }
+  const CancelToken later = parent.WithDeadline(now + std::chrono::hours(1));
+  const CancelToken grandchild = later.WithDeadline(now + std::chrono::hours(2));
+  EXPECT_FALSE(grandchild.stopped());
+  grandchild.Cancel();
+  EXPECT_TRUE(grandchild.cancelled());
+  EXPECT_FALSE(later.stopped());
+  EXPECT_FALSE(parent.stopped());
+  parent.Cancel();
+  EXPECT_TRUE(later.cancelled());
+  try {
+    later.ThrowIfStopped();
+    ADD_FAILURE() << "a cancelled parent did not stop its child";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kCancelled);
+  }
+  // A parent's passed deadline stops a child whose own deadline is later.
+  const CancelToken timed;
+  timed.SetDeadline(now - std::chrono::seconds(1));
+  EXPECT_TRUE(timed.WithDeadline(now + std::chrono::hours(1)).deadline_passed());
 }
 
 }  // namespace
