@@ -12,6 +12,8 @@ packages=(
   libspdlog-dev libfmt-dev libtbb-dev libompl-dev libboost-all-dev
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev
   libcivetweb-dev libssl-dev zlib1g-dev
+  # The shared store's Redis client (server/redis_store.cc: hiredis parses the replies).
+  libhiredis-dev
   # google/rpc/status.proto and error_details.proto (the rich error details the server attaches;
   # proto/CMakeLists.txt compiles them): Debian ships googleapis' protos only in this package.
   golang-github-gogo-googleapis-dev
@@ -28,6 +30,8 @@ if [ "${1:-}" != "--build" ]; then
   # openssl for the certificates of tests/integration/test_security.py, chromium for the 3D
   # view's browser test (tests/view, headless, WebGL through SwiftShader).
   packages+=(librsvg2-bin nginx openssl chromium)
+  # Redis 7 for the shared store's tests (tests/integration/store_test.py, tests/deploy).
+  packages+=(redis-server redis-tools)
   # kubectl renders deploy/ (tests/deploy); Debian's kubernetes-client provides it, but an
   # image may already carry kubectl from another package (they conflict): only when absent.
   command -v kubectl > /dev/null || packages+=(kubernetes-client)

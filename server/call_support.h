@@ -127,6 +127,12 @@ struct PathMergerService::StoredHGraph {
   std::unique_ptr<HybridizationSession> session;
   uint64_t version = 0;    // bumped each time a query's copy replaces `session`
   int64_t generation = 1;  // 1 after the merge, +1 per AddPaths (HGraph.generation)
+  // The version of this H-Graph's snapshot in the shared store that `session` holds (0: none):
+  // what the next write compares and sets.
+  uint64_t store_version = 0;
+  double resolution = 0;  // the planner's, for a replica that loads the snapshot
+  std::string tenant;     // the owner of its session
+  v1::Digest scene_digest;
   // What the merge was asked and answered (GetHGraph, and a repeat of its hgraph_id).
   v1::Measure measure;
   v1::MergeOptions options;

@@ -21,10 +21,12 @@
 #include <string>
 
 #include "core/common/error.h"
+#include "core/common/file_bytes.h"
 #include "server/auth.h"
 #include "server/mesh_importer.h"
 #include "server/metrics.h"
 #include "server/service.h"
+#include "server/store.h"
 #include "server/tls.h"
 
 namespace {
@@ -52,7 +54,12 @@ struct Flags {
   double mesh_import_timeout_s = 30;
   hgraph::server::TlsFiles tls;
   std::string auth_tokens;
+  bool reflection = false;
   double upload_idle_timeout_s = 30;
+  std::string store = "memory";
+  std::string store_password_file;
+  std::string store_ca_file;
+  int store_timeout_ms = 500;
 };
 
 }  // namespace
@@ -141,10 +148,30 @@ int main(int argc, char** argv) {
                  "file of \"TOKEN TENANT\" lines: every call needs \"authorization: Bearer "
                  "TOKEN\"; sessions and H-Graphs belong to the token's tenant (health stays open)")
       ->check(CLI::ExistingFile);
+  app.add_flag("--reflection", flags.reflection,
+               "serve gRPC reflection even with --auth-tokens (it is on without them; with them it "
+               "would describe the API to callers without a token)");
   app.add_option("--upload-idle-timeout-s", flags.upload_idle_timeout_s,
                  "an UploadBlob stream that sends nothing for this long is aborted (ABORTED) and "
                  "its reserved bytes and admission slot released")
       ->check(CLI::Range(0.5, 86400.0))
+      ->capture_default_str();
+  app.add_option("--store", flags.store,
+                 "what replicas share: \"memory\" (nothing: each replica holds what it built) or "
+                 "\"redis://HOST[:PORT][/DB]\" (\"rediss://\" for TLS): blobs, scenes, sessions "
+                 "and H-Graph snapshots, so that any replica answers for any session")
+      ->capture_default_str();
+  app.add_option("--store-password-file", flags.store_password_file,
+                 "file holding the store's password (\"PASSWORD\" or \"USER PASSWORD\" for a "
+                 "Redis ACL user), one line")
+      ->check(CLI::ExistingFile);
+  app.add_option("--store-ca-file", flags.store_ca_file,
+                 "PEM CA certificate(s) to verify a rediss:// store with (default: the system's)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--store-timeout-ms", flags.store_timeout_ms,
+                 "each store operation fails after this long; the server then serves from memory "
+                 "and retries the store a second later")
+      ->check(CLI::Range(1, 60000))
       ->capture_default_str();
   app.add_option("--log-level", flags.log_level, "log verbosity")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}))
@@ -203,11 +230,45 @@ int main(int argc, char** argv) {
       }
       options.auth = hgraph::server::Authenticator(tokens);
     }
+    const hgraph::server::StoreAddress store = hgraph::server::ParseStoreAddress(flags.store);
+    if (!store.redis && !flags.store_password_file.empty()) {
+      throw hgraph::InputError("--store-password-file",
+                               "needs --store redis://... or rediss://...");
+    }
+    if (!store.tls && !flags.store_ca_file.empty()) {
+      throw hgraph::InputError("--store-ca-file", "needs --store rediss://...");
+    }
+    if (store.redis) {
+      hgraph::server::RedisOptions redis{
+          .address = store,
+          .ca_file = flags.store_ca_file,
+          .timeout = std::chrono::milliseconds(flags.store_timeout_ms)};
+      if (!flags.store_password_file.empty()) {
+        const std::string text =
+            hgraph::ReadFileBytes(flags.store_password_file, "--store-password-file");
+        std::string line = text.substr(0, text.find('\n'));
+        if (!line.empty() && line.back() == '\r') line.pop_back();
+        const size_t space = line.find(' ');
+        if (space != std::string::npos) {
+          redis.username = line.substr(0, space);
+          line = line.substr(space + 1);
+        }
+        if (line.empty()) {
+          throw hgraph::InputError("--store-password-file", "holds no password on its first line");
+        }
+        redis.password = line;
+      }
+      options.store = hgraph::server::MakeRedisStore(redis);
+      spdlog::info("--store: {} (blobs, scenes, sessions and H-Graphs shared; timeout {} ms)",
+                   options.store->Describe(), flags.store_timeout_ms);
+    }
     hgraph::server::Metrics metrics;
     hgraph::server::PathMergerService service(options, metrics);
 
     grpc::EnableDefaultHealthCheckService(true);
-    grpc::reflection::InitProtoReflectionServerBuilderPlugin();
+    // Reflection answers without a token: with tenants it is off unless asked for.
+    const bool reflection = flags.auth_tokens.empty() || flags.reflection;
+    if (reflection) grpc::reflection::InitProtoReflectionServerBuilderPlugin();
     grpc::ServerBuilder builder;
     int port = 0;
     builder.AddListeningPort(flags.listen, credentials, &port);
@@ -245,6 +306,7 @@ int main(int argc, char** argv) {
       if (signal < 0) {
         service.ExpireIdleSessions();
         service.ExpireIdleUploads();
+        service.SyncStore();
       }
     }
     spdlog::info("received signal {}: draining for {} s, then shutting down (grace {} s)", signal,

@@ -132,12 +132,19 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
 
   void Merge(v1::MergePathsResponse* out) {
     const v1::MergePathsRequest& request = *request_;
-    const v1::Session session = service_->sessions_.Touch(request.session(), "session", tenant_);
+    const v1::Session session = service_->TouchSession(request.session(), "session", tenant_);
     CheckBatchLimits(request.paths(), service_->options());
     if (request.paths().paths_size() == 0) throw InputError("paths.paths", "must not be empty");
     // A repeat under the same hgraph_id matches on everything but the progress rate.
     const std::string fingerprint =
         RequestFingerprint(request, v1::MergePathsRequest::kProgressIntervalMsFieldNumber);
+    // A repeat of a merge another replica kept: its H-Graph, loaded, answers it.
+    if (service_->shared_ && !request.hgraph_id().empty()) {
+      const std::string kept = session.name() + "/hgraphs/" + request.hgraph_id();
+      if (service_->sessions_.StateOf(kept) == SessionRegistry::HGraphState::kUnknown) {
+        service_->LoadHGraph(kept, tenant_, "hgraph_id");
+      }
+    }
     bool repeat = false;
     const std::string name = service_->sessions_.ReserveHGraph(session.name(), request.hgraph_id(),
                                                                fingerprint, tenant_, &repeat);
@@ -193,6 +200,9 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
     stored->measure = request.measure();
     stored->options = request.options();
     stored->fingerprint = fingerprint;
+    stored->resolution = resolution;
+    stored->tenant = tenant_;
+    stored->scene_digest = session.scene();
     for (const v1::Path& path : request.paths().paths()) stored->input_names.push_back(path.name());
 
     Keep(session.name(), name, std::move(stored), out);
@@ -206,11 +216,24 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
     out->set_hgraph(name);
     out->set_generation(stored->generation);
     out->set_retention(v1::RETENTION_KEPT);
+    out->set_shared(service_->shared_ != nullptr);
     stored->answer = *out;
+    // In the shared store before the answer goes out (and before any other call can reach it
+    // here): a client told of an H-Graph can re-query it on any replica.
+    bool written = false;
+    if (service_->shared_) {
+      written = service_->SaveHGraph(name, *stored, /*cas=*/false) == SharedState::Write::kStored;
+      if (!written) {
+        out->set_shared(false);
+        stored->answer.set_shared(false);
+      }
+    }
     // The name stays empty for readers older than `retention`, which says why.
-    const auto not_kept = [out](v1::Retention why) {
+    const auto not_kept = [this, out, written, &name](v1::Retention why) {
+      if (written) service_->shared_->DeleteHGraph(name);
       out->clear_hgraph();
       out->clear_generation();
+      out->clear_shared();
       out->set_retention(why);
     };
     // In the cache before the registry says kept: a GetHGraph in between sees the merge still

@@ -174,7 +174,17 @@ ServiceMetrics::ServiceMetrics(Metrics& registry)
                                               "Cache entries evicted, by kind.")),
       sessions(registry.DeclareGauge("hgraph_sessions", "Live sessions.")),
       admitted_calls(registry.DeclareGauge("hgraph_admitted_calls",
-                                           "Calls queued or running on the worker pool.")) {}
+                                           "Calls queued or running on the worker pool.")),
+      store_errors(registry.DeclareCounter(
+          "hgraph_store_errors_total",
+          "Operations on the shared store (--store) that failed or timed out, by op; the "
+          "server serves from memory meanwhile.")),
+      store_loads(registry.DeclareCounter(
+          "hgraph_store_loads_total",
+          "Entries this replica did not hold and loaded from the shared store, by kind.")),
+      store_refused(registry.DeclareCounter(
+          "hgraph_store_refused_total",
+          "Entries of the shared store refused as corrupt, truncated or foreign, by kind.")) {}
 
 void Metrics::AddCollector(std::function<void()> collect) {
   std::lock_guard lock(mutex_);

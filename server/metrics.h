@@ -142,6 +142,11 @@ struct ServiceMetrics {
   Counter cache_evictions;
   Gauge sessions;
   Gauge admitted_calls;
+  // The shared store (--store redis://...): failed operations by op, and entries a replica
+  // loaded from it (a session or H-Graph it did not hold) or refused (corrupt, foreign), by kind.
+  Counter store_errors;
+  Counter store_loads;
+  Counter store_refused;
 };
 
 // Serves GET /metrics on a civetweb listener. Not copyable.

@@ -46,7 +46,7 @@ class PathMergerService::PlanCall final : public grpc::ServerWriteReactor<v1::Pl
  private:
   void Plan() {
     const v1::PlanPathsRequest& request = *request_;
-    const v1::Session session = service_->sessions_.Touch(request.session(), "session", tenant_);
+    const v1::Session session = service_->TouchSession(request.session(), "session", tenant_);
     if (request.count() < 0) {
       throw InputError("count",
                        "must be >= 0 (0 = one path), got " + std::to_string(request.count()));

@@ -90,15 +90,41 @@ void ValidateDigest(const v1::Digest& digest, const std::string& field) {
 }
 
 SceneStore::SceneStore(ResourceCache& cache, ServiceMetrics& metrics, MeshImporter importer,
-                       bool clearance_bound)
+                       bool clearance_bound, SharedState* shared)
     : cache_(cache),
       metrics_(metrics),
       importer_(std::move(importer)),
-      clearance_bound_(clearance_bound) {}
+      clearance_bound_(clearance_bound),
+      shared_(shared) {}
 
 bool SceneStore::HasBlob(const v1::Digest& digest) const {
   auto blob = cache_.Get<const std::string>(CacheKind::kBlob, digest.sha256());
-  return blob != nullptr && static_cast<int64_t>(blob->size()) == digest.size_bytes();
+  if (blob != nullptr) return static_cast<int64_t>(blob->size()) == digest.size_bytes();
+  return shared_ != nullptr && shared_->HasBlob(digest);
+}
+
+std::shared_ptr<const std::string> SceneStore::FindBlob(const v1::Digest& digest) const {
+  auto blob = cache_.Get<const std::string>(CacheKind::kBlob, digest.sha256());
+  if (blob || shared_ == nullptr) return blob;
+  std::optional<std::string> bytes = shared_->GetBlob(digest);
+  if (!bytes) return nullptr;
+  const size_t size = bytes->size();
+  blob = std::make_shared<const std::string>(std::move(*bytes));
+  cache_.Put(CacheKind::kBlob, digest.sha256(), blob, size);
+  return blob;
+}
+
+std::vector<std::string> SceneStore::BlobsOf(const v1::Digest& scene) const {
+  std::vector<std::string> out;
+  auto proto = cache_.Get<const v1::Scene>(CacheKind::kScene, scene.sha256());
+  if (!proto) return out;
+  const auto add = [&](const v1::Shape& shape) {
+    if (shape.has_mesh() && shape.mesh().has_digest())
+      out.push_back(shape.mesh().digest().sha256());
+  };
+  for (const auto& o : proto->obstacles()) add(o.shape());
+  for (const auto& r : proto->robot()) add(r.shape());
+  return out;
 }
 
 bool SceneStore::PutBlob(const v1::Digest& declared, std::string bytes) {
@@ -112,14 +138,18 @@ bool SceneStore::PutBlob(const v1::Digest& declared, std::string bytes) {
     throw InputError("digest.sha256",
                      "declared " + declared.sha256() + ", the bytes received hash to " + actual);
   }
-  if (HasBlob(declared)) return false;
+  if (auto held = cache_.Get<const std::string>(CacheKind::kBlob, declared.sha256());
+      held != nullptr && static_cast<int64_t>(held->size()) == declared.size_bytes()) {
+    return false;
+  }
   const size_t size = bytes.size();
-  if (!cache_.Put(CacheKind::kBlob, declared.sha256(),
-                  std::make_shared<const std::string>(std::move(bytes)), size)) {
+  auto blob = std::make_shared<const std::string>(std::move(bytes));
+  if (!cache_.Put(CacheKind::kBlob, declared.sha256(), blob, size)) {
     throw Error(ErrorCode::kResourceExhausted, "digest.size_bytes",
                 std::to_string(size) + " bytes exceed the server's cache budget (--cache-bytes=" +
                     std::to_string(cache_.budget_bytes()) + ")");
   }
+  if (shared_ != nullptr) shared_->PutBlob(declared.sha256(), *blob);
   return true;
 }
 
@@ -150,6 +180,7 @@ v1::Digest SceneStore::PutScene(const v1::Scene& scene, const CancelToken& token
     cache_.Erase(CacheKind::kScene, digest.sha256());
     throw;
   }
+  if (shared_ != nullptr) shared_->PutScene(digest, bytes);
   return digest;
 }
 
@@ -203,6 +234,13 @@ LoadedScene SceneStore::Load(const v1::Digest& digest, const std::string& field,
                              const CancelToken& token) {
   const std::string& sha = digest.sha256();
   auto proto = cache_.Get<const v1::Scene>(CacheKind::kScene, sha);
+  if (!proto && shared_ != nullptr) {
+    if (std::optional<v1::Scene> stored = shared_->GetScene(digest)) {
+      const size_t size = stored->ByteSizeLong();
+      proto = std::make_shared<const v1::Scene>(std::move(*stored));
+      cache_.Put(CacheKind::kScene, sha, proto, size);
+    }
+  }
   if (!proto) {
     throw ServiceError(grpc::StatusCode::NOT_FOUND, "SCENE_NOT_FOUND", field,
                        "scene sha256:" + sha +
@@ -211,7 +249,7 @@ LoadedScene SceneStore::Load(const v1::Digest& digest, const std::string& field,
   }
   CheckSceneSize(*proto, digest, field);
   BlobResolver resolver = [this](const v1::Digest& blob_digest) -> std::optional<std::string> {
-    auto blob = cache_.Get<const std::string>(CacheKind::kBlob, blob_digest.sha256());
+    auto blob = FindBlob(blob_digest);
     if (!blob) return std::nullopt;
     return *blob;
   };

@@ -8,6 +8,7 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <vector>
 
 #include "core/collision/collision_world.h"
 #include "core/common/progress.h"
@@ -16,6 +17,7 @@
 #include "server/mesh_importer.h"
 #include "server/metrics.h"
 #include "server/resource_cache.h"
+#include "server/shared_state.h"
 
 namespace hgraph::server {
 
@@ -34,12 +36,16 @@ class SceneStore {
   // Mesh bytes are parsed by `importer`, in a child process per mesh.
   // With clearance_bound, every scene loaded gets its clearance bound too (built once, cached
   // with its collision world and counted with it in the cache's budget).
+  // With `shared` (may be null; outlives this), blobs and scenes are written to the shared
+  // store as they are stored here, and one not held here is looked up there before NOT_FOUND.
   SceneStore(ResourceCache& cache, ServiceMetrics& metrics, MeshImporter importer,
-             bool clearance_bound = false);
+             bool clearance_bound = false, SharedState* shared = nullptr);
   SceneStore(const SceneStore&) = delete;
   SceneStore& operator=(const SceneStore&) = delete;
 
   bool HasBlob(const v1::Digest& digest) const;
+  // The mesh digests (SHA-256) of a scene held here; empty when it is not.
+  std::vector<std::string> BlobsOf(const v1::Digest& scene) const;
   // Verifies the bytes against `declared` (size, then SHA-256) and stores them. Returns false if
   // the blob was already held. Throws InputError naming "digest.size_bytes" or
   // "digest.sha256" on a mismatch, Error(kResourceExhausted) if it exceeds the cache budget.
@@ -61,11 +67,14 @@ class SceneStore {
 
  private:
   LoadedScene Load(const v1::Digest& digest, const std::string& field, const CancelToken& token);
+  // The blob from the cache, or from the shared store (then cached); null if neither holds it.
+  std::shared_ptr<const std::string> FindBlob(const v1::Digest& digest) const;
 
   ResourceCache& cache_;
   ServiceMetrics& metrics_;
   MeshImporter importer_;
   bool clearance_bound_;
+  SharedState* shared_;
   std::mutex loading_mutex_;
   std::map<std::string, std::shared_future<LoadedScene>> loading_;
 };

@@ -21,6 +21,8 @@
 #include "server/resource_cache.h"
 #include "server/scene_store.h"
 #include "server/session_registry.h"
+#include "server/shared_state.h"
+#include "server/store.h"
 #include "server/worker_pool.h"
 
 namespace hgraph::server {
@@ -45,6 +47,8 @@ struct ServerOptions {
   Authenticator auth;  // --auth-tokens: who a call comes from (open without it)
   // An UploadBlob stream that sends nothing for this long is aborted (ExpireIdleUploads).
   std::chrono::milliseconds upload_idle_timeout{std::chrono::seconds(30)};
+  // --store: what the replicas share (server/shared_state.h); null shares nothing (memory).
+  std::shared_ptr<Store> store;
 };
 
 // Thread safe. Not copyable or movable (reactors point into it).
@@ -95,6 +99,10 @@ class PathMergerService final : public v1::PathMerger::CallbackService {
 
   // Drops sessions idle past their time-to-live and their H-Graphs; called periodically.
   void ExpireIdleSessions();
+  // With a shared store: writes the check reports requeries added since the last call (one
+  // snapshot per H-Graph changed), and extends the store's expiry of the sessions used since;
+  // called periodically, off the gRPC and worker threads.
+  void SyncStore();
   // Aborts UploadBlob streams idle past options().upload_idle_timeout (ABORTED), releasing
   // their reserved bytes and admission slots; called periodically.
   void ExpireIdleUploads();
@@ -127,8 +135,23 @@ class PathMergerService final : public v1::PathMerger::CallbackService {
   // The stored H-Graph `name` ("sessions/<id>/hgraphs/<hgraph id>", named `field` in errors)
   // for `tenant`: its session touched (NOT_FOUND / PERMISSION_DENIED as SessionRegistry::Touch),
   // NOT_FOUND (HGRAPH_NOT_FOUND) if the cache no longer holds it.
+  // With a shared store, one not held here is loaded from it, and one held here that another
+  // replica has changed since is loaded again.
   std::shared_ptr<StoredHGraph> HeldHGraph(const std::string& name, const std::string& tenant,
                                            const std::string& field = "hgraph");
+  // SessionRegistry::Touch, except that with a shared store a session this replica does not
+  // hold is read from it (and adopted) before NOT_FOUND.
+  v1::Session TouchSession(const std::string& name, const std::string& field,
+                           const std::string& tenant);
+  // The H-Graph as the shared store holds it, loaded, cached and adopted by its session; null
+  // when there is no store, it holds no such H-Graph, or what it holds is unsound (logged).
+  // Its session must be held here (the caller has touched it).
+  std::shared_ptr<StoredHGraph> LoadHGraph(const std::string& name, const std::string& tenant,
+                                           const std::string& field);
+  // Writes the H-Graph's snapshot to the shared store as its next version: over whatever is
+  // there (a merge), or only over the version this replica last wrote or loaded (`cas`).
+  // Returns kStored with no store.
+  SharedState::Write SaveHGraph(const std::string& name, StoredHGraph& stored, bool cas);
   // Counts a stored H-Graph that a query or an addition grew at its size now
   // (ResourceCache::Resize), so that the cache's budget bounds what the stored H-Graphs hold.
   // Returns whether the cache still holds it: KEPT, TOO_LARGE (grown past the whole budget,
@@ -146,6 +169,7 @@ class PathMergerService final : public v1::PathMerger::CallbackService {
   Metrics& metrics_;
   ServiceMetrics families_;  // declared in metrics_; before scenes_, which counts into them
   ResourceCache cache_;
+  std::unique_ptr<SharedState> shared_;  // null without a shared store; before scenes_
   SceneStore scenes_;
   SessionRegistry sessions_;
   WorkerPool pool_;
@@ -155,6 +179,10 @@ class PathMergerService final : public v1::PathMerger::CallbackService {
   bool shutting_down_ = false;
   uint64_t next_durable_ = 0;
   std::map<uint64_t, CancelToken> durable_;  // merges that outlive their clients
+  std::mutex store_mutex_;
+  std::set<std::string> unsynced_;  // H-Graphs whose requeries added checks not yet stored
+  SessionRegistry::Clock::time_point last_refresh_{};
+  std::mutex hgraph_loading_mutex_;  // one load from the shared store at a time
   // The responses that carry a merged path (arena_allocator.h).
   ArenaMessageAllocator<v1::GetHGraphRequest, v1::HGraph> get_hgraph_messages_;
   ArenaMessageAllocator<v1::RequeryRequest, v1::RequeryResponse> requery_messages_;

@@ -268,6 +268,55 @@ SessionRegistry::HGraphState SessionRegistry::StateOf(const std::string& hgraph)
   return it == record->names.end() ? HGraphState::kUnknown : it->second.state;
 }
 
+bool SessionRegistry::Adopt(const std::string& name, const std::string& tenant,
+                            const v1::Digest& scene, Clock::time_point create_time) {
+  ValidateName(name, "session");
+  std::lock_guard lock(mutex_);
+  if (auto it = sessions_.find(name); it != sessions_.end()) {
+    if (it->second.expire_time > Clock::now()) return true;
+    sessions_.erase(it);
+  }
+  if (static_cast<int>(sessions_.size()) >= max_sessions_) return false;
+  Record& record = sessions_[name];
+  record.tenant = tenant;
+  record.scene = scene;
+  record.create_time = create_time;
+  record.expire_time = Clock::now() + ttl_;
+  return true;
+}
+
+bool SessionRegistry::AdoptHGraph(const std::string& hgraph, const std::string& fingerprint) {
+  std::lock_guard lock(mutex_);
+  Record* record = RecordOf(hgraph);
+  if (record == nullptr) return false;
+  auto it = record->names.find(hgraph);
+  if (it != record->names.end()) return it->second.state == HGraphState::kKept;
+  record->names[hgraph] =
+      Record::HGraphEntry{.state = HGraphState::kKept, .fingerprint = fingerprint};
+  record->hgraphs.push_back(hgraph);
+  return true;
+}
+
+void SessionRegistry::ForgetHGraph(const std::string& hgraph) {
+  std::lock_guard lock(mutex_);
+  Record* record = RecordOf(hgraph);
+  if (record == nullptr) return;
+  auto it = record->names.find(hgraph);
+  if (it == record->names.end() || it->second.state != HGraphState::kKept) return;
+  record->names.erase(it);
+  auto& list = record->hgraphs;
+  list.erase(std::remove(list.begin(), list.end(), hgraph), list.end());
+}
+
+std::vector<v1::Session> SessionRegistry::UsedSince(Clock::time_point since) const {
+  std::lock_guard lock(mutex_);
+  std::vector<v1::Session> out;
+  for (const auto& [name, record] : sessions_) {
+    if (record.expire_time > since + ttl_) out.push_back(ToProto(name, record));
+  }
+  return out;
+}
+
 std::vector<std::string> SessionRegistry::ExpireIdle(Clock::time_point now) {
   std::lock_guard lock(mutex_);
   std::vector<std::string> hgraphs;

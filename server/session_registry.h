@@ -75,6 +75,21 @@ class SessionRegistry {
   void RemoveHGraph(const std::string& hgraph);
   HGraphState StateOf(const std::string& hgraph) const;
 
+  // A session another replica created (read from the shared store), added as it is unless this
+  // registry holds it already. Returns false when --max-sessions sessions exist.
+  bool Adopt(const std::string& name, const std::string& tenant, const v1::Digest& scene,
+             Clock::time_point create_time);
+  // An H-Graph another replica built (loaded from the shared store), kept from now on with the
+  // fingerprint of its merge. Unless its session is unknown here, or the name is running or
+  // retired here: then false.
+  bool AdoptHGraph(const std::string& hgraph, const std::string& fingerprint);
+  // Forgets a kept H-Graph name (evicted from this replica's cache while the shared store still
+  // holds it): StateOf says kUnknown, and a later call may load it again.
+  void ForgetHGraph(const std::string& hgraph);
+  // The sessions used since `since` (their expiry extended after since + ttl), for refreshing
+  // their entries in the shared store.
+  std::vector<v1::Session> UsedSince(Clock::time_point since) const;
+
   // Removes sessions idle past their expiry; returns the names of their H-Graphs.
   std::vector<std::string> ExpireIdle(Clock::time_point now);
   int size() const;

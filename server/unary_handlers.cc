@@ -53,7 +53,7 @@ grpc::ServerUnaryReactor* PathMergerService::FindMissingBlobs(
           if (!scenes_.HasBlob(request->digests(i))) *response->add_missing() = request->digests(i);
         }
       },
-      /*on_worker=*/false);
+      /*on_worker=*/shared_ != nullptr);
   return call;
 }
 
@@ -83,6 +83,14 @@ grpc::ServerUnaryReactor* PathMergerService::CreateSession(grpc::CallbackServerC
         // Loads the scene now (or finds it loaded), so that a missing scene is reported here.
         scenes_.Get(request->scene(), "scene", token);
         *response = sessions_.Create(request->scene(), request->session_id(), call->tenant());
+        if (shared_) {
+          const auto& created = response->create_time();
+          shared_->PutSession(
+              response->name(),
+              SessionRecord{.tenant = call->tenant(),
+                            .scene = response->scene(),
+                            .create_time_ns = created.seconds() * 1'000'000'000 + created.nanos()});
+        }
       },
       /*on_worker=*/true);
   return call;
@@ -94,9 +102,9 @@ grpc::ServerUnaryReactor* PathMergerService::GetSession(grpc::CallbackServerCont
   auto* call = new UnaryCall(this, context, "GetSession", request->name());
   call->Run(
       [=, this](const CancelToken&) {
-        *response = sessions_.Touch(request->name(), "name", call->tenant());
+        *response = TouchSession(request->name(), "name", call->tenant());
       },
-      /*on_worker=*/false);
+      /*on_worker=*/shared_ != nullptr);
   return call;
 }
 
@@ -138,16 +146,35 @@ grpc::ServerUnaryReactor* PathMergerService::DeleteSession(grpc::CallbackServerC
   auto* call = new UnaryCall(this, context, "DeleteSession", request->name());
   call->Run(
       [=, this](const CancelToken&) {
-        DropHGraphs(sessions_.Delete(request->name(), "name", call->tenant()));
+        if (shared_) TouchSession(request->name(), "name", call->tenant());
+        const std::vector<std::string> hgraphs =
+            sessions_.Delete(request->name(), "name", call->tenant());
+        if (shared_) shared_->DeleteSession(request->name(), hgraphs);
+        DropHGraphs(hgraphs);
       },
-      /*on_worker=*/false);
+      /*on_worker=*/shared_ != nullptr);
   return call;
 }
 
 std::shared_ptr<PathMergerService::StoredHGraph> PathMergerService::HeldHGraph(
     const std::string& name, const std::string& tenant, const std::string& field) {
-  sessions_.Touch(SessionRegistry::SessionOfHGraph(name, field), field, tenant);
+  TouchSession(SessionRegistry::SessionOfHGraph(name, field), field, tenant);
   auto stored = cache_.Get<StoredHGraph>(CacheKind::kHGraph, name);
+  if (shared_ && stored) {
+    uint64_t held = 0;
+    {
+      std::lock_guard lock(stored->mutex);
+      held = stored->store_version;
+    }
+    // Another replica changed it since (AddPaths there): this copy is stale.
+    if (held != 0 && shared_->HGraphVersion(name) > held) {
+      spdlog::info("{} changed in the store since this replica held it; loading it again",
+                   ClientText(name));
+      if (auto fresh = LoadHGraph(name, tenant, field)) stored = fresh;
+    }
+  } else if (shared_ && sessions_.StateOf(name) == SessionRegistry::HGraphState::kUnknown) {
+    stored = LoadHGraph(name, tenant, field);
+  }
   if (!stored) {
     throw ServiceError(grpc::StatusCode::NOT_FOUND, "HGRAPH_NOT_FOUND", field,
                        ClientText(name) +
@@ -194,6 +221,11 @@ grpc::ServerUnaryReactor* PathMergerService::Requery(grpc::CallbackServerContext
           response->set_hgraph(request->hgraph());
         }
         RecordMerge("Requery", response->result());
+        if (shared_ && result.stats.edges_checked > 0) {
+          // Its checks are written with the next SyncStore, not before this answer.
+          std::lock_guard lock(store_mutex_);
+          unsynced_.insert(request->hgraph());
+        }
       },
       /*on_worker=*/true);
   return call;
@@ -205,74 +237,97 @@ grpc::ServerUnaryReactor* PathMergerService::AddPaths(grpc::CallbackServerContex
   auto* call = new UnaryCall(this, context, "AddPaths", request->hgraph());
   call->Run(
       [=, this](const CancelToken& token) {
-        const auto stored = HeldHGraph(request->hgraph(), call->tenant());
-        CheckBatchLimits(request->paths(), options_);
-        if (request->request_id().size() > 63 ||
-            std::any_of(request->request_id().begin(), request->request_id().end(),
-                        [](char c) { return c < '!' || c > '~'; })) {
-          throw InputError("request_id", "must be at most 63 printable ASCII characters");
-        }
-        const MeasureSpec measure = MeasureFromProto(request->measure());
-        // One addition at a time from the look-up of its request id to its answer's record, so
-        // that a repeat that comes while the first runs waits for its answer.
-        std::lock_guard requests(stored->requests_mutex);
-        const std::string fingerprint = RequestFingerprint(*request);
-        if (!request->request_id().empty()) {
-          for (const auto& [id, first] : stored->requests) {
-            if (id != request->request_id()) continue;
-            if (first.first != fingerprint) {
-              throw ServiceError(grpc::StatusCode::ALREADY_EXISTS, "ALREADY_EXISTS", "request_id",
-                                 "request_id " + ClientText(id) +
-                                     " was used by another AddPaths request on " +
-                                     ClientText(request->hgraph()));
-            }
-            *response = first.second;
-            return;
+        // With a shared store, the addition is written with compare-and-set on the version this
+        // replica holds: when another replica wrote first, this copy is dropped and the addition
+        // runs again on the stored H-Graph, once.
+        for (int attempt = 0;; ++attempt) {
+          if (attempt == 2) {
+            throw ServiceError(grpc::StatusCode::ABORTED, "STORE_CONFLICT", "hgraph",
+                               ClientText(request->hgraph()) +
+                                   " was changed by another replica at the same time, twice; "
+                                   "nothing was added; retry",
+                               std::chrono::milliseconds(100));
           }
-        }
-        int held = 0;
-        int64_t generation = 0;
-        {
-          std::lock_guard lock(stored->mutex);
-          held = stored->session->graph().num_paths();
-          generation = stored->generation;
-        }
-        if (request->has_expected_generation() && request->expected_generation() != generation) {
-          throw ServiceError(
-              grpc::StatusCode::ABORTED, "GENERATION_MISMATCH", "expected_generation",
-              ClientText(request->hgraph()) + " is at generation " + std::to_string(generation) +
-                  ", not " + std::to_string(request->expected_generation()) +
-                  "; nothing was added");
-        }
-        CheckPathCount(held + request->paths().paths_size(), "paths.paths",
-                       "inputs (" + std::to_string(held) + " held in " +
-                           ClientText(request->hgraph()) + " and " +
-                           std::to_string(request->paths().paths_size()) + " more)",
-                       options_);
-        const std::vector<InputPath> paths = PathsFromProto(request->paths());
-        int64_t added = 0;
-        MergeResult result;
-        WithRequestPaths([&] {
-          result = AddToStored(*stored, paths, measure, token, &added, ReportClearance(*request));
-        });
-        {
-          std::lock_guard lock(stored->mutex);
-          generation = ++stored->generation;
-          for (const InputPath& path : paths) stored->input_names.push_back(path.name);
-        }
-        *response->mutable_result() = MergeResultToProto(result);
-        EchoEvaluation(stored->options, response->mutable_result());
-        response->set_retention(Reaccount(request->hgraph(), *stored));
-        if (response->retention() == v1::RETENTION_KEPT) {
-          response->set_hgraph(request->hgraph());
-        }
-        response->set_candidates_added(added);
-        response->set_generation(generation);
-        RecordMerge("AddPaths", response->result());
-        if (!request->request_id().empty()) {
-          stored->requests.emplace_back(request->request_id(),
-                                        std::make_pair(fingerprint, *response));
-          if (stored->requests.size() > StoredHGraph::kMaxRequestIds) stored->requests.pop_front();
+          const auto stored = HeldHGraph(request->hgraph(), call->tenant());
+          CheckBatchLimits(request->paths(), options_);
+          if (request->request_id().size() > 63 ||
+              std::any_of(request->request_id().begin(), request->request_id().end(),
+                          [](char c) { return c < '!' || c > '~'; })) {
+            throw InputError("request_id", "must be at most 63 printable ASCII characters");
+          }
+          const MeasureSpec measure = MeasureFromProto(request->measure());
+          // One addition at a time from the look-up of its request id to its answer's record, so
+          // that a repeat that comes while the first runs waits for its answer.
+          std::lock_guard requests(stored->requests_mutex);
+          const std::string fingerprint = RequestFingerprint(*request);
+          if (!request->request_id().empty()) {
+            for (const auto& [id, first] : stored->requests) {
+              if (id != request->request_id()) continue;
+              if (first.first != fingerprint) {
+                throw ServiceError(grpc::StatusCode::ALREADY_EXISTS, "ALREADY_EXISTS", "request_id",
+                                   "request_id " + ClientText(id) +
+                                       " was used by another AddPaths request on " +
+                                       ClientText(request->hgraph()));
+              }
+              *response = first.second;
+              return;
+            }
+          }
+          int held = 0;
+          int64_t generation = 0;
+          {
+            std::lock_guard lock(stored->mutex);
+            held = stored->session->graph().num_paths();
+            generation = stored->generation;
+          }
+          if (request->has_expected_generation() && request->expected_generation() != generation) {
+            throw ServiceError(
+                grpc::StatusCode::ABORTED, "GENERATION_MISMATCH", "expected_generation",
+                ClientText(request->hgraph()) + " is at generation " + std::to_string(generation) +
+                    ", not " + std::to_string(request->expected_generation()) +
+                    "; nothing was added");
+          }
+          CheckPathCount(held + request->paths().paths_size(), "paths.paths",
+                         "inputs (" + std::to_string(held) + " held in " +
+                             ClientText(request->hgraph()) + " and " +
+                             std::to_string(request->paths().paths_size()) + " more)",
+                         options_);
+          const std::vector<InputPath> paths = PathsFromProto(request->paths());
+          int64_t added = 0;
+          MergeResult result;
+          WithRequestPaths([&] {
+            result = AddToStored(*stored, paths, measure, token, &added, ReportClearance(*request));
+          });
+          {
+            std::lock_guard lock(stored->mutex);
+            generation = ++stored->generation;
+            for (const InputPath& path : paths) stored->input_names.push_back(path.name);
+          }
+          const SharedState::Write write = SaveHGraph(request->hgraph(), *stored, /*cas=*/true);
+          if (write == SharedState::Write::kConflict) {
+            spdlog::info("{}: another replica stored a newer version; adding again on it",
+                         ClientText(request->hgraph()));
+            cache_.Erase(CacheKind::kHGraph, request->hgraph());
+            sessions_.ForgetHGraph(request->hgraph());
+            continue;
+          }
+          response->set_shared(shared_ != nullptr && write == SharedState::Write::kStored);
+          *response->mutable_result() = MergeResultToProto(result);
+          EchoEvaluation(stored->options, response->mutable_result());
+          response->set_retention(Reaccount(request->hgraph(), *stored));
+          if (response->retention() == v1::RETENTION_KEPT) {
+            response->set_hgraph(request->hgraph());
+          }
+          response->set_candidates_added(added);
+          response->set_generation(generation);
+          RecordMerge("AddPaths", response->result());
+          if (!request->request_id().empty()) {
+            stored->requests.emplace_back(request->request_id(),
+                                          std::make_pair(fingerprint, *response));
+            if (stored->requests.size() > StoredHGraph::kMaxRequestIds)
+              stored->requests.pop_front();
+          }
+          return;
         }
       },
       /*on_worker=*/true);
@@ -286,7 +341,7 @@ grpc::ServerUnaryReactor* PathMergerService::GetHGraph(grpc::CallbackServerConte
   call->Run(
       [=, this](const CancelToken&) {
         const std::string session = SessionRegistry::SessionOfHGraph(request->name(), "name");
-        sessions_.Touch(session, "name", call->tenant());
+        TouchSession(session, "name", call->tenant());
         if (sessions_.StateOf(request->name()) == SessionRegistry::HGraphState::kRunning) {
           response->set_name(request->name());
           response->set_state(v1::HGraph::STATE_RUNNING);
@@ -305,7 +360,7 @@ grpc::ServerUnaryReactor* PathMergerService::GetHGraph(grpc::CallbackServerConte
         response->set_edges(stored->session->graph().num_edges());
         response->set_memory_bytes(static_cast<int64_t>(stored->session->memory_bytes()));
       },
-      /*on_worker=*/false);
+      /*on_worker=*/shared_ != nullptr);
   return call;
 }
 
@@ -316,7 +371,12 @@ grpc::ServerUnaryReactor* PathMergerService::DeleteHGraph(grpc::CallbackServerCo
   call->Run(
       [=, this](const CancelToken&) {
         const std::string session = SessionRegistry::SessionOfHGraph(request->name(), "name");
-        sessions_.Touch(session, "name", call->tenant());
+        TouchSession(session, "name", call->tenant());
+        // One the store holds but this replica does not: loaded, so that it can be deleted.
+        if (shared_ &&
+            sessions_.StateOf(request->name()) == SessionRegistry::HGraphState::kUnknown) {
+          LoadHGraph(request->name(), call->tenant(), "name");
+        }
         switch (sessions_.StateOf(request->name())) {
           case SessionRegistry::HGraphState::kRunning:
             throw ServiceError(grpc::StatusCode::ABORTED, "MERGE_RUNNING", "name",
@@ -330,8 +390,9 @@ grpc::ServerUnaryReactor* PathMergerService::DeleteHGraph(grpc::CallbackServerCo
         }
         sessions_.RemoveHGraph(request->name());
         cache_.Erase(CacheKind::kHGraph, request->name());
+        if (shared_) shared_->DeleteHGraph(request->name());
       },
-      /*on_worker=*/false);
+      /*on_worker=*/shared_ != nullptr);
   return call;
 }
 
@@ -341,7 +402,7 @@ grpc::ServerUnaryReactor* PathMergerService::CheckPaths(grpc::CallbackServerCont
   auto* call = new UnaryCall(this, context, "CheckPaths", request->session());
   call->Run(
       [=, this](const CancelToken& token) {
-        const v1::Session session = sessions_.Touch(request->session(), "session", call->tenant());
+        const v1::Session session = TouchSession(request->session(), "session", call->tenant());
         CheckBatchLimits(request->paths(), options_);
         LoadedScene scene = scenes_.Get(session.scene(), "session", token);
         token.ThrowIfStopped();

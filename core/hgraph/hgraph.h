@@ -35,6 +35,8 @@ struct HEdge {
 
 // Copyable and movable; not thread safe for writes (edges are filled in by the builder, which
 // writes each edge's report from exactly one worker).
+class SessionSnapshot;  // core/merge/snapshot.cc
+
 class HGraph {
  public:
   // The most nodes subdivision puts on one input edge.
@@ -102,6 +104,9 @@ class HGraph {
   int FindEdge(int u, int v) const;
 
  private:
+  // A stored H-Graph is rebuilt from its parts (core/merge/snapshot.cc).
+  friend class SessionSnapshot;
+  HGraph() = default;
   // Names an unnamed path "path<index>", requires two waypoints, validates and normalises them
   // (errors name `field`).
   static void PrepareWaypoints(const Space& space, int index, const std::string& field,

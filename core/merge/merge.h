@@ -9,6 +9,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/common/progress.h"
@@ -204,7 +205,12 @@ class HybridizationSession {
  private:
   // The anytime post-optimization (optimize.h) grows the query's overlay and searches it.
   friend class PostOptimizer;
+  // Saves and loads every member below (core/merge/snapshot.h).
+  friend class SessionSnapshot;
   HybridizationSession(const HybridizationSession&) = default;
+  // An empty session for SessionSnapshot to fill.
+  HybridizationSession(const ClearanceChecker& checker, HGraph graph)
+      : checker_(&checker), graph_(std::move(graph)) {}
   // Every growth of the H-Graph goes through these three, and each grows the evidence with it
   // (GrowEvidence), so that the two always match.
   // The edge (u, v), or the one the H-Graph holds between them (HGraph::AddEdge); `report`, if

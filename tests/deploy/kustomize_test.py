@@ -2,7 +2,8 @@
 """Renders every overlay of deploy/ with `kubectl kustomize` and checks the objects: the kinds
 present, labels and selectors, ports, native gRPC probes, the shutdown budget
 (terminationGracePeriodSeconds > preStop + --drain-s + --grace-s), resources, the HPA and PDB
-targets, and the nginx configuration (grpc_pass, consistent hash on x-hgraph-session).
+targets, the nginx configuration (grpc_pass, consistent hash on x-hgraph-session), and the shared
+store (every replica's --store, the Redis StatefulSet's volume and append-only file).
 Usage: kustomize_test.py DEPLOY_DIR. Exits 77 (skipped) when kubectl is not installed."""
 import pathlib
 import shutil
@@ -103,6 +104,30 @@ def check_overlay(deploy, overlay):
     expect("hgraph-headless:50051" in conf["upstreams.inc"], f"{name}: upstreams miss the Service")
     mounts = nginx["containers"][0]["volumeMounts"]
     expect(any(m["mountPath"] == "/etc/nginx/conf.d" for m in mounts), f"{name}: conf not mounted")
+    # The shared store: every replica gets --store; the URL names the overlay's own Redis (a
+    # StatefulSet with a persistent volume and the append-only file) or one outside.
+    expect("--store=$(HGRAPH_STORE)" in container["args"], f"{name}: no --store argument")
+    store = flags.get("HGRAPH_STORE", "")
+    expect(store.startswith("redis://") or store.startswith("rediss://"),
+           f"{name}: HGRAPH_STORE {store!r} is not a Redis URL")
+    redis = by_kind.get("StatefulSet", {}).get("hgraph-redis")
+    if redis is None:
+        expect("hgraph-redis" not in store, f"{name}: HGRAPH_STORE names a Redis not deployed")
+    else:
+        expect("redis://hgraph-redis:6379" in store, f"{name}: HGRAPH_STORE {store!r} misses "
+               "the overlay's Redis")
+        rspec = redis["spec"]
+        args = rspec["template"]["spec"]["containers"][0]["args"]
+        expect(args[args.index("--appendonly") + 1] == "yes", f"{name}: Redis without AOF")
+        claims = rspec.get("volumeClaimTemplates", [])
+        mounts = rspec["template"]["spec"]["containers"][0]["volumeMounts"]
+        expect(claims and any(m["name"] == claims[0]["metadata"]["name"] and
+                              m["mountPath"] == args[args.index("--dir") + 1] for m in mounts),
+               f"{name}: Redis's --dir is not on its persistent volume")
+        rservice = by_kind["Service"].get("hgraph-redis", {}).get("spec", {})
+        rlabels = rspec["template"]["metadata"]["labels"]
+        expect(rservice and all(rlabels.get(k) == v for k, v in rservice["selector"].items()),
+               f"{name}: Service hgraph-redis selects no Redis pod")
     # The file in deploy/ is what the affinity test runs nginx with.
     expect(text == (deploy / "base" / "nginx" / "hgraph.conf").read_text(),
            f"{name}: rendered hgraph.conf differs from deploy/base/nginx/hgraph.conf")
@@ -115,13 +140,17 @@ def main():
         print("SKIP: kubectl is not installed (scripts/install-deps.sh installs kubernetes-client)")
         return SKIP
     overlays = sorted(p for p in (deploy / "overlays").iterdir() if p.is_dir())
-    expect(len(overlays) >= 2, "expected the dev and prod overlays")
+    expect(len(overlays) >= 3, "expected the dev, prod and external-redis overlays")
     rendered = {o.name: check_overlay(deploy, o) for o in overlays}
     if "prod" in rendered:
         prod = rendered["prod"]
         expect(prod["Deployment"]["hgraph-server"]["spec"]["replicas"] >= 3, "prod: < 3 replicas")
         expect(prod["PodDisruptionBudget"]["hgraph-server"]["spec"].get("maxUnavailable") == 1,
                "prod: PDB should allow one replica down")
+        expect("hgraph-redis" in prod.get("StatefulSet", {}), "prod: no Redis StatefulSet")
+    if "external-redis" in rendered:
+        expect("StatefulSet" not in rendered["external-redis"],
+               "external-redis: deploys a Redis of its own")
     for f in failures:
         print("FAIL:", f)
     print(f"{len(overlays)} overlays rendered, {len(failures)} problems")

@@ -123,6 +123,10 @@ class MergeOutcome:
     # --cache-bytes, SESSION_ENDED when the session went away while the merge ran);
     # UNSPECIFIED when the call stopped early (complete False) or the server predates it.
     retention: int = service_pb2.RETENTION_UNSPECIFIED
+    # True when the server wrote the H-Graph to its shared store (hgraph-server --store
+    # redis://...) before answering: any replica answers requery and add_paths on it. False
+    # when one replica alone holds it (no shared store, or the store was down).
+    shared: bool = False
 
     @property
     def kept(self) -> bool:
@@ -246,8 +250,10 @@ class Client:
     lost, and the balancer now sends the session's calls to another one), the client waits
     (exponential backoff: `backoff_s`, doubled each attempt, at most `retries` attempts),
     uploads the scene again (only the blobs the new replica lacks), re-creates the session under
-    the same name and repeats the call. H-Graphs of the lost session are gone: a requery on one
-    raises NOT_FOUND; merge again. `retries=0` turns recovery off.
+    the same name and repeats the call. Without a shared store, H-Graphs of the lost session are
+    gone: a requery on one raises NOT_FOUND; merge again. With one (hgraph-server --store
+    redis://...), another replica loads the session and its H-Graphs and no recovery is needed.
+    `retries=0` turns recovery off.
 
     Security: `tls_ca` (the PEM CA that signed the server's certificate; a path or the bytes)
     turns TLS on; without it but with a client certificate the system's roots are trusted.
@@ -595,7 +601,7 @@ class Client:
                 elif event.HasField("result"):
                     return MergeOutcome(event.result, event.hgraph, events,
                                         generation=event.generation,
-                                        retention=event.retention)
+                                        retention=event.retention, shared=event.shared)
         except StopMerge:
             call.cancel()
             if best is None:

@@ -1,0 +1,425 @@
+#include "server/shared_state.h"
+
+#include <spdlog/spdlog.h>
+
+#include <cinttypes>
+#include <cstdio>
+#include <cstring>
+#include <utility>
+
+#include "core/common/client_text.h"
+#include "core/common/digest.h"
+
+namespace hgraph::server {
+namespace {
+
+constexpr char kPrefix[] = "hgraph:1:";
+// An H-Graph record: this tag and its version in 16 hex digits (what compare-and-set compares),
+// the SHA-256 of the rest in hex, then the fields.
+constexpr std::string_view kHGraphTag = "HGRAPH1:";
+constexpr size_t kVersionEnd = 8 + 16;
+constexpr size_t kHeaderSize = kVersionEnd + 64;
+constexpr std::string_view kSessionTag = "SESSION1";
+// Store entries outlive a replica's own expiry of the session by this much.
+constexpr std::chrono::minutes kTtlMargin{1};
+constexpr std::chrono::seconds kLogInterval{10};
+
+// A list of byte strings: a count, then each string's length and bytes (64-bit little-endian).
+class Fields {
+ public:
+  void Add(std::string_view s) {
+    Number(s.size());
+    body_.append(s);
+    ++count_;
+  }
+  void Add(const google::protobuf::Message& m) { Add(m.SerializeAsString()); }
+  std::string Take() {
+    std::string out;
+    Append(out, count_);
+    out += body_;
+    return out;
+  }
+
+ private:
+  static void Append(std::string& out, uint64_t n) {
+    char bytes[8];
+    std::memcpy(bytes, &n, 8);
+    out.append(bytes, 8);
+  }
+  void Number(uint64_t n) { Append(body_, n); }
+  std::string body_;
+  uint64_t count_ = 0;
+};
+
+// Splits what Fields wrote; nullopt for anything else.
+std::optional<std::vector<std::string_view>> SplitFields(std::string_view in) {
+  const auto number = [&](uint64_t* n) {
+    if (in.size() < 8) return false;
+    std::memcpy(n, in.data(), 8);
+    in.remove_prefix(8);
+    return true;
+  };
+  uint64_t count = 0;
+  if (!number(&count) || count > in.size() / 8) return std::nullopt;
+  std::vector<std::string_view> fields;
+  for (uint64_t i = 0; i < count; ++i) {
+    uint64_t size = 0;
+    if (!number(&size) || size > in.size()) return std::nullopt;
+    fields.push_back(in.substr(0, size));
+    in.remove_prefix(size);
+  }
+  if (!in.empty()) return std::nullopt;
+  return fields;
+}
+
+std::string Hex16(uint64_t v) {
+  char text[17];
+  std::snprintf(text, sizeof(text), "%016" PRIx64, v);
+  return text;
+}
+
+std::optional<uint64_t> ParseHex16(std::string_view text) {
+  if (text.size() != 16) return std::nullopt;
+  uint64_t v = 0;
+  for (char c : text) {
+    int d = 0;
+    if (c >= '0' && c <= '9') {
+      d = c - '0';
+    } else if (c >= 'a' && c <= 'f') {
+      d = c - 'a' + 10;
+    } else {
+      return std::nullopt;
+    }
+    v = v * 16 + static_cast<uint64_t>(d);
+  }
+  return v;
+}
+
+std::optional<int64_t> ParseInt(std::string_view text) {
+  if (text.empty() || text.size() > 19) return std::nullopt;
+  int64_t v = 0;
+  for (char c : text) {
+    if (c < '0' || c > '9') return std::nullopt;
+    v = v * 10 + (c - '0');
+  }
+  return v;
+}
+
+template <typename Message>
+bool ParseMessage(std::string_view bytes, Message* out) {
+  return out->ParseFromArray(bytes.data(), static_cast<int>(bytes.size()));
+}
+
+}  // namespace
+
+std::string SharedState::BlobKey(const std::string& sha256) {
+  return std::string(kPrefix) + "blob:" + sha256;
+}
+std::string SharedState::SceneKey(const std::string& sha256) {
+  return std::string(kPrefix) + "scene:" + sha256;
+}
+// "sessions/<id>" -> "hgraph:1:session:<id>"
+std::string SharedState::SessionKey(const std::string& session) {
+  return std::string(kPrefix) + "session:" + session.substr(std::strlen("sessions/"));
+}
+// "sessions/<id>/hgraphs/<h>" -> "hgraph:1:hgraph:<id>:<h>"
+std::string SharedState::HGraphKey(const std::string& hgraph) {
+  const size_t at = hgraph.find("/hgraphs/");
+  const std::string session =
+      hgraph.substr(std::strlen("sessions/"), at - std::strlen("sessions/"));
+  return std::string(kPrefix) + "hgraph:" + session + ":" +
+         hgraph.substr(at + std::strlen("/hgraphs/"));
+}
+
+SharedState::SharedState(std::shared_ptr<Store> store, std::chrono::milliseconds ttl,
+                         ServiceMetrics& metrics)
+    : store_(std::move(store)), ttl_(ttl + kTtlMargin), metrics_(metrics) {}
+
+void SharedState::Failed(const char* op, const std::string& what) {
+  healthy_ = false;
+  metrics_.store_errors.Increment({{"op", op}});
+  const auto now = std::chrono::steady_clock::now();
+  std::lock_guard lock(log_mutex_);
+  if (last_log_ != std::chrono::steady_clock::time_point{} && now - last_log_ < kLogInterval) {
+    ++unlogged_;
+    return;
+  }
+  spdlog::warn(
+      "store {}: {} failed: {} ({} more failures since the last line); serving from memory",
+      store_->Describe(), op, what, unlogged_);
+  last_log_ = now;
+  unlogged_ = 0;
+}
+
+void SharedState::Succeeded() {
+  if (healthy_.exchange(true)) return;
+  spdlog::info("store {}: answering again", store_->Describe());
+}
+
+void SharedState::Refused(const char* kind, const std::string& key, const std::string& why) {
+  metrics_.store_refused.Increment({{"kind", kind}});
+  spdlog::warn("store {}: refused the {} under {}: {}", store_->Describe(), kind, ClientText(key),
+               why);
+}
+
+void SharedState::PutBlob(const std::string& sha256, const std::string& bytes) {
+  try {
+    store_->Set(BlobKey(sha256), bytes, ttl_);
+    Succeeded();
+  } catch (const StoreError& e) {
+    Failed("put_blob", e.what());
+  }
+}
+
+bool SharedState::HasBlob(const v1::Digest& digest) {
+  try {
+    const bool held = store_->Exists(BlobKey(digest.sha256()));
+    Succeeded();
+    return held;
+  } catch (const StoreError& e) {
+    Failed("has_blob", e.what());
+    return false;
+  }
+}
+
+std::optional<std::string> SharedState::GetBlob(const v1::Digest& digest) {
+  std::optional<std::string> bytes;
+  const std::string key = BlobKey(digest.sha256());
+  try {
+    bytes = store_->Get(key);
+    Succeeded();
+  } catch (const StoreError& e) {
+    Failed("get_blob", e.what());
+    return std::nullopt;
+  }
+  if (!bytes) return std::nullopt;
+  if (static_cast<int64_t>(bytes->size()) != digest.size_bytes() ||
+      Sha256Hex(*bytes) != digest.sha256()) {
+    Refused("blob", key, "its bytes do not match the digest");
+    return std::nullopt;
+  }
+  metrics_.store_loads.Increment({{"kind", "blob"}});
+  return bytes;
+}
+
+void SharedState::PutScene(const v1::Digest& digest, const std::string& canonical_bytes) {
+  try {
+    store_->Set(SceneKey(digest.sha256()), canonical_bytes, ttl_);
+    Succeeded();
+  } catch (const StoreError& e) {
+    Failed("put_scene", e.what());
+  }
+}
+
+std::optional<v1::Scene> SharedState::GetScene(const v1::Digest& digest) {
+  std::optional<std::string> bytes;
+  const std::string key = SceneKey(digest.sha256());
+  try {
+    bytes = store_->Get(key);
+    Succeeded();
+  } catch (const StoreError& e) {
+    Failed("get_scene", e.what());
+    return std::nullopt;
+  }
+  if (!bytes) return std::nullopt;
+  v1::Scene scene;
+  if (Sha256Hex(*bytes) != digest.sha256() || !ParseMessage(*bytes, &scene)) {
+    Refused("scene", key, "its bytes do not match the digest");
+    return std::nullopt;
+  }
+  metrics_.store_loads.Increment({{"kind", "scene"}});
+  return scene;
+}
+
+void SharedState::PutSession(const std::string& name, const SessionRecord& record) {
+  Fields fields;
+  fields.Add(record.tenant);
+  fields.Add(record.scene.sha256());
+  fields.Add(std::to_string(record.scene.size_bytes()));
+  fields.Add(std::to_string(record.create_time_ns));
+  try {
+    store_->Set(SessionKey(name), std::string(kSessionTag) + fields.Take(), ttl_);
+    Succeeded();
+  } catch (const StoreError& e) {
+    Failed("put_session", e.what());
+  }
+}
+
+std::optional<SessionRecord> SharedState::GetSession(const std::string& name) {
+  std::optional<std::string> bytes;
+  const std::string key = SessionKey(name);
+  try {
+    bytes = store_->Get(key);
+    Succeeded();
+  } catch (const StoreError& e) {
+    Failed("get_session", e.what());
+    return std::nullopt;
+  }
+  if (!bytes) return std::nullopt;
+  const std::string_view value(*bytes);
+  std::optional<std::vector<std::string_view>> fields;
+  if (value.starts_with(kSessionTag)) fields = SplitFields(value.substr(kSessionTag.size()));
+  std::optional<int64_t> size;
+  std::optional<int64_t> created;
+  if (fields && fields->size() == 4) {
+    size = ParseInt((*fields)[2]);
+    created = ParseInt((*fields)[3]);
+  }
+  if (!size || !created || !IsSha256Hex((*fields)[1])) {
+    Refused("session", key, "not a session record of this format");
+    return std::nullopt;
+  }
+  SessionRecord record;
+  record.tenant = std::string((*fields)[0]);
+  record.scene.set_sha256(std::string((*fields)[1]));
+  record.scene.set_size_bytes(*size);
+  record.create_time_ns = *created;
+  metrics_.store_loads.Increment({{"kind", "session"}});
+  return record;
+}
+
+void SharedState::DeleteSession(const std::string& name, const std::vector<std::string>& hgraphs) {
+  std::vector<std::string> keys = {SessionKey(name)};
+  for (const std::string& h : hgraphs) keys.push_back(HGraphKey(h));
+  try {
+    store_->Delete(keys);
+    Succeeded();
+  } catch (const StoreError& e) {
+    Failed("delete", e.what());
+  }
+}
+
+void SharedState::DeleteHGraph(const std::string& hgraph) {
+  try {
+    store_->Delete({HGraphKey(hgraph)});
+    Succeeded();
+  } catch (const StoreError& e) {
+    Failed("delete", e.what());
+  }
+}
+
+void SharedState::Refresh(const std::string& session, const std::vector<std::string>& hgraphs,
+                          const v1::Digest& scene, const std::vector<std::string>& blob_sha256s) {
+  std::vector<std::string> keys = {SessionKey(session), SceneKey(scene.sha256())};
+  for (const std::string& h : hgraphs) keys.push_back(HGraphKey(h));
+  for (const std::string& b : blob_sha256s) keys.push_back(BlobKey(b));
+  try {
+    store_->Expire(keys, ttl_);
+    Succeeded();
+  } catch (const StoreError& e) {
+    Failed("refresh", e.what());
+  }
+}
+
+SharedState::Write SharedState::PutHGraph(const HGraphRecord& record, uint64_t expected_version,
+                                          uint64_t version) {
+  Fields names;
+  for (const std::string& n : record.input_names) names.Add(n);
+  Fields fields;
+  fields.Add(record.name);
+  fields.Add(record.tenant);
+  fields.Add(record.scene.sha256());
+  fields.Add(std::to_string(record.scene.size_bytes()));
+  fields.Add(std::string_view(reinterpret_cast<const char*>(&record.resolution), 8));
+  fields.Add(std::to_string(record.generation));
+  fields.Add(record.measure);
+  fields.Add(record.options);
+  fields.Add(record.fingerprint);
+  fields.Add(record.answer);
+  fields.Add(names.Take());
+  fields.Add(record.session);
+  const std::string body = fields.Take();
+  const std::string value = std::string(kHGraphTag) + Hex16(version) + Sha256Hex(body) + body;
+  const std::string key = HGraphKey(record.name);
+  try {
+    bool stored = true;
+    if (expected_version == 0) {
+      store_->Set(key, value, ttl_);
+    } else {
+      stored =
+          store_->SetIfPrefix(key, std::string(kHGraphTag) + Hex16(expected_version), value, ttl_);
+    }
+    Succeeded();
+    return stored ? Write::kStored : Write::kConflict;
+  } catch (const StoreError& e) {
+    Failed("put_hgraph", e.what());
+    return Write::kFailed;
+  }
+}
+
+uint64_t SharedState::HGraphVersion(const std::string& name) {
+  std::optional<std::string> head;
+  try {
+    head = store_->GetPrefix(HGraphKey(name), kVersionEnd);
+    Succeeded();
+  } catch (const StoreError& e) {
+    Failed("get_hgraph", e.what());
+    return 0;
+  }
+  if (!head || !head->starts_with(kHGraphTag) || head->size() != kVersionEnd) return 0;
+  return ParseHex16(std::string_view(*head).substr(kHGraphTag.size())).value_or(0);
+}
+
+std::optional<std::pair<uint64_t, HGraphRecord>> SharedState::GetHGraph(const std::string& name) {
+  std::optional<std::string> bytes;
+  const std::string key = HGraphKey(name);
+  try {
+    bytes = store_->Get(key);
+    Succeeded();
+  } catch (const StoreError& e) {
+    Failed("get_hgraph", e.what());
+    return std::nullopt;
+  }
+  if (!bytes) return std::nullopt;
+  const std::string_view value(*bytes);
+  if (value.size() < kHeaderSize || !value.starts_with(kHGraphTag)) {
+    Refused("hgraph", key, "not an H-Graph record of this format (or truncated)");
+    return std::nullopt;
+  }
+  const std::optional<uint64_t> version =
+      ParseHex16(value.substr(kHGraphTag.size(), kVersionEnd - kHGraphTag.size()));
+  const std::string_view body = value.substr(kHeaderSize);
+  if (!version || *version == 0 ||
+      Sha256Hex(body) != value.substr(kVersionEnd, kHeaderSize - kVersionEnd)) {
+    Refused("hgraph", key, "its checksum does not match (corrupt or truncated)");
+    return std::nullopt;
+  }
+  const auto fields = SplitFields(body);
+  HGraphRecord record;
+  std::optional<int64_t> size;
+  std::optional<int64_t> generation;
+  std::optional<std::vector<std::string_view>> names;
+  if (fields && fields->size() == 12) {
+    const auto& f = *fields;
+    record.name = std::string(f[0]);
+    record.tenant = std::string(f[1]);
+    record.scene.set_sha256(std::string(f[2]));
+    size = ParseInt(f[3]);
+    if (f[4].size() == 8) std::memcpy(&record.resolution, f[4].data(), 8);
+    generation = ParseInt(f[5]);
+    names = SplitFields(f[10]);
+    if (size && generation && names && f[4].size() == 8 && IsSha256Hex(f[2]) &&
+        ParseMessage(f[6], &record.measure) && ParseMessage(f[7], &record.options) &&
+        ParseMessage(f[9], &record.answer)) {
+      record.scene.set_size_bytes(*size);
+      record.generation = *generation;
+      record.fingerprint = std::string(f[8]);
+      for (std::string_view n : *names) record.input_names.emplace_back(n);
+      record.session = std::string(f[11]);
+    } else {
+      size.reset();
+    }
+  }
+  if (!size) {
+    Refused("hgraph", key, "its fields do not parse");
+    return std::nullopt;
+  }
+  if (record.name != name) {
+    Refused("hgraph", key, "it names another H-Graph (" + ClientText(record.name) + ")");
+    return std::nullopt;
+  }
+  metrics_.store_loads.Increment({{"kind", "hgraph"}});
+  return std::make_pair(*version, std::move(record));
+}
+
+}  // namespace hgraph::server

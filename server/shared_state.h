@@ -1,0 +1,122 @@
+// What the replicas share through the store (server/store.h), and how it is laid out:
+//
+//   hgraph:1:blob:<sha256>          the blob's bytes (content-addressed: checked on read)
+//   hgraph:1:scene:<sha256>         the scene's canonical bytes (checked on read)
+//   hgraph:1:session:<id>           a session record: tenant, scene digest, create time
+//   hgraph:1:hgraph:<id>:<hgraph>   an H-Graph record: a versioned snapshot (compare-and-set)
+//
+// Every entry expires: a session's record and its H-Graphs after the session's time-to-live
+// (extended while the session is used), blobs and scenes with the sessions that use them.
+//
+// The store is a cache shared by replicas, not the source of truth for one call: every
+// operation here catches the store's errors, counts them (hgraph_store_errors_total), logs them
+// at most once per interval, and answers "not there" or "not stored", so that a store that is
+// down or slow leaves each replica serving from its memory. An entry that is corrupt, truncated,
+// of another format or of another name than its key is refused the same way
+// (hgraph_store_refused_total), never trusted.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "hgraph/v1/scene.pb.h"
+#include "hgraph/v1/service.pb.h"
+#include "server/metrics.h"
+#include "server/store.h"
+
+namespace hgraph::server {
+
+struct SessionRecord {
+  std::string tenant;
+  v1::Digest scene;
+  int64_t create_time_ns = 0;  // since the Unix epoch
+};
+
+// A kept H-Graph, as a replica that did not build it needs it to answer as the builder would.
+struct HGraphRecord {
+  std::string name;  // "sessions/<id>/hgraphs/<hgraph id>"
+  std::string tenant;
+  v1::Digest scene;
+  double resolution = 0;  // the local planner's
+  int64_t generation = 1;
+  v1::Measure measure;
+  v1::MergeOptions options;
+  std::string fingerprint;  // of the MergePathsRequest (a repeat of its hgraph_id)
+  v1::MergePathsResponse answer;
+  std::vector<std::string> input_names;
+  std::string session;  // core/merge/snapshot.h's bytes
+};
+
+// Thread safe. Not copyable.
+class SharedState {
+ public:
+  // Entries expire `ttl` (the session time-to-live) after their last write or refresh, plus a
+  // margin so that a replica's own expiry of a session comes first.
+  SharedState(std::shared_ptr<Store> store, std::chrono::milliseconds ttl, ServiceMetrics& metrics);
+  SharedState(const SharedState&) = delete;
+  SharedState& operator=(const SharedState&) = delete;
+
+  std::string Describe() const { return store_->Describe(); }
+
+  void PutBlob(const std::string& sha256, const std::string& bytes);
+  bool HasBlob(const v1::Digest& digest);
+  // The blob's bytes if held and matching the digest.
+  std::optional<std::string> GetBlob(const v1::Digest& digest);
+  void PutScene(const v1::Digest& digest, const std::string& canonical_bytes);
+  std::optional<v1::Scene> GetScene(const v1::Digest& digest);
+
+  void PutSession(const std::string& name, const SessionRecord& record);
+  std::optional<SessionRecord> GetSession(const std::string& name);
+  // Removes the session's record and the named H-Graphs' records.
+  void DeleteSession(const std::string& name, const std::vector<std::string>& hgraphs);
+  void DeleteHGraph(const std::string& hgraph);
+  // Extends the expiry of a session's entries: its record, its H-Graphs, its scene and the
+  // scene's blobs (mesh digests).
+  void Refresh(const std::string& session, const std::vector<std::string>& hgraphs,
+               const v1::Digest& scene, const std::vector<std::string>& blob_sha256s);
+
+  enum class Write {
+    kStored,    // the record holds what was written
+    kConflict,  // another replica wrote a newer version first (compare-and-set): nothing written
+    kFailed,    // the store failed (counted and logged): nothing written
+  };
+  // Writes the record as `version`: over whatever is there when `expected_version` is 0 (a new
+  // merge), else only over version `expected_version` (an addition, a requery's new checks).
+  Write PutHGraph(const HGraphRecord& record, uint64_t expected_version, uint64_t version);
+  // The record and its version, if held and sound.
+  std::optional<std::pair<uint64_t, HGraphRecord>> GetHGraph(const std::string& name);
+  // The version of the record held (0 when none is, or on failure), read without the snapshot.
+  uint64_t HGraphVersion(const std::string& name);
+
+  // Whether the last operation failed (a metric and the health of the store, not of the server).
+  bool healthy() const { return healthy_; }
+
+  static std::string BlobKey(const std::string& sha256);
+  static std::string SceneKey(const std::string& sha256);
+  static std::string SessionKey(const std::string& session);
+  static std::string HGraphKey(const std::string& hgraph);
+
+ private:
+  // Counts a failed operation and logs it, at most once per interval (with the number of
+  // failures not logged).
+  void Failed(const char* op, const std::string& what);
+  void Succeeded();
+  // Counts and logs an entry refused as unsound.
+  void Refused(const char* kind, const std::string& key, const std::string& why);
+
+  std::shared_ptr<Store> store_;
+  const std::chrono::milliseconds ttl_;
+  ServiceMetrics& metrics_;
+  std::atomic<bool> healthy_{true};
+  std::mutex log_mutex_;
+  std::chrono::steady_clock::time_point last_log_{};
+  int64_t unlogged_ = 0;
+};
+
+}  // namespace hgraph::server

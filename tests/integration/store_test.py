@@ -1,0 +1,264 @@
+"""Replicas sharing a store (hgraph-server --store redis://...): a real redis-server on a free
+loopback port, started by each test, and real hgraph-server processes driven from the Python
+client. What one replica built, another answers for, as the builder would; another tenant's
+token cannot load it; a store that is corrupt, down or restarted never breaks a call.
+
+Run through CTest (which sets the environment), or by hand:
+    HGRAPH_SERVER=build/hgraph-server PYTHONPATH=client/python:build/python \
+    /usr/bin/python3 -m pytest tests/integration/store_test.py
+"""
+import os
+import pathlib
+import shutil
+import signal
+import socket
+import subprocess
+import time
+import urllib.request
+
+import grpc
+import pytest
+
+import hgraph_client
+from server_process import ServerProcess, free_port
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+DATA = ROOT / "tests" / "data" / "circles"
+SERVER = os.environ.get("HGRAPH_SERVER", str(ROOT / "build" / "hgraph-server"))
+REDIS = shutil.which("redis-server") or "/usr/bin/redis-server"
+
+pytestmark = pytest.mark.skipif(not pathlib.Path(REDIS).exists(),
+                                reason="redis-server is not installed (scripts/install-deps.sh)")
+
+
+class Redis:
+    """redis-server on 127.0.0.1:<port>, its data in `folder` (append-only file on)."""
+
+    def __init__(self, folder, port=None):
+        self.folder = pathlib.Path(folder)
+        self.port = port or free_port()
+        self.proc = None
+        self.start()
+
+    def start(self):
+        self.proc = subprocess.Popen(
+            [REDIS, "--port", str(self.port), "--bind", "127.0.0.1", "--save", "",
+             "--appendonly", "yes", "--appendfsync", "always", "--dir", str(self.folder),
+             "--protected-mode", "no", "--daemonize", "no"],
+            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        for _ in range(200):
+            if self.proc.poll() is not None:
+                raise RuntimeError("redis-server exited: " + self.proc.stdout.read())
+            try:
+                if self.command("PING") == "PONG":
+                    return
+            except (OSError, RuntimeError):  # not listening yet, or LOADING its append-only file
+                time.sleep(0.02)
+        raise RuntimeError("redis-server did not answer")
+
+    def stop(self, sig=signal.SIGTERM):
+        if self.proc.poll() is None:
+            self.proc.send_signal(sig)
+            self.proc.wait(timeout=20)
+
+    @property
+    def url(self):
+        return f"redis://127.0.0.1:{self.port}"
+
+    def command(self, *args):
+        """One command over a raw socket (RESP); the reply's string, integer or None."""
+        parts = [a if isinstance(a, bytes) else str(a).encode() for a in args]
+        wire = b"*%d\r\n" % len(parts) + b"".join(b"$%d\r\n%s\r\n" % (len(p), p) for p in parts)
+        with socket.create_connection(("127.0.0.1", self.port), timeout=5) as s:
+            s.sendall(wire)
+            f = s.makefile("rb")
+            line = f.readline()
+            kind, rest = line[:1], line[1:-2]
+            if kind == b"+":
+                return rest.decode()
+            if kind == b":":
+                return int(rest)
+            if kind == b"-":
+                raise RuntimeError(rest.decode())
+            if kind == b"$":
+                n = int(rest)
+                return None if n < 0 else f.read(n + 2)[:-2]
+            if kind == b"*":
+                return [f.readline() for _ in range(2 * int(rest))][1::2]
+            raise RuntimeError(f"unexpected reply {line!r}")
+
+    def keys(self, pattern):
+        return [k.strip().decode() for k in self.command("KEYS", pattern)]
+
+
+class Replica(ServerProcess):
+    def __init__(self, *flags):
+        super().__init__(SERVER, "--listen", "127.0.0.1:0", "--metrics-listen", "127.0.0.1:0",
+                         "--threads", "2", "--drain-s", "0", "--grace-s", "2",
+                         "--store-timeout-ms", "300", *flags)
+
+    def client(self, **kwargs):
+        return hgraph_client.connect(self.target, **kwargs)
+
+    def metric(self, name, **labels):
+        url = f"http://127.0.0.1:{self.metrics_port}/metrics"
+        total = 0.0
+        for line in urllib.request.urlopen(url, timeout=5).read().decode().splitlines():
+            if line.startswith("#") or not line.startswith(name):
+                continue
+            series, value = line.rsplit(" ", 1)
+            if series.split("{")[0] == name and all(f'{k}="{v}"' in series
+                                                    for k, v in labels.items()):
+                total += float(value)
+        return total
+
+    def kill(self):
+        self.proc.kill()
+        self.proc.wait()
+
+    def stop(self, timeout=20):
+        return super().stop(timeout)
+
+
+@pytest.fixture
+def redis(tmp_path):
+    r = Redis(tmp_path)
+    yield r
+    r.stop()
+
+
+@pytest.fixture
+def replicas(redis):
+    started = []
+
+    def start(*flags):
+        r = Replica("--store", redis.url, *flags)
+        started.append(r)
+        return r
+
+    yield start
+    for r in started:
+        if r.proc.poll() is None:
+            r.stop()
+
+
+def paths():
+    return hgraph_client.load_paths_text((DATA / "paths.txt").read_text())
+
+
+def merge_on(client):
+    client.create_session(client.upload_scene(DATA / "scene.json"))
+    return client.merge(paths(), measure="length", variant="all-pairs", optimize_ms=0)
+
+
+def test_another_replica_answers_after_the_builder_is_killed(replicas):
+    a, b = replicas(), replicas()
+    with a.client() as ca:
+        merged = merge_on(ca)
+        session = ca.session
+    assert merged.kept and merged.shared
+    a.kill()  # SIGKILL: nothing written after the answer
+    with b.client() as cb:
+        again = cb.requery(merged.hgraph, "length")
+        assert again.path == merged.result.path
+        assert again.stats.collision_checks == 0 and again.stats.distance_queries == 0
+        assert again.stats.edges_reused > 0
+        assert cb.get_session(session).scene.sha256
+        # Under another measure it checks what it needs, and keeps answering.
+        other = cb.requery(merged.hgraph, "inverse-clearance", k=2)
+        assert len(other.path.waypoints) >= 2
+    assert b.metric("hgraph_store_loads_total", kind="hgraph") == 1
+    assert b.metric("hgraph_store_loads_total", kind="session") == 1
+
+
+def test_another_tenant_cannot_load_a_stored_session(replicas, tmp_path):
+    tokens = tmp_path / "tokens.txt"
+    tokens.write_text("token-of-tenant-a-0001 team-a\ntoken-of-tenant-b-0002 team-b\n")
+    tokens.chmod(0o600)
+    a = replicas("--auth-tokens", str(tokens))
+    b = replicas("--auth-tokens", str(tokens))
+    with a.client(token="token-of-tenant-a-0001") as ca:
+        merged = merge_on(ca)
+        session = ca.session
+    for replica in (a, b):
+        with replica.client(token="token-of-tenant-b-0002") as other:
+            for call in (lambda: other.requery(merged.hgraph, "length"),
+                         lambda: other.get_session(session)):
+                with pytest.raises(hgraph_client.HgraphError) as e:
+                    call()
+                assert e.value.code == grpc.StatusCode.PERMISSION_DENIED, e.value.message
+    # The owner's token still reaches it on B.
+    with b.client(token="token-of-tenant-a-0001") as cb:
+        assert cb.requery(merged.hgraph, "length").path == merged.result.path
+
+
+def test_corrupt_entries_are_refused_with_clear_errors(replicas, redis):
+    a = replicas()
+    with a.client() as ca:
+        merged = merge_on(ca)
+        wrench = ROOT / "scenes" / "wrench" / "scene.json"
+        mesh_scene = ca.upload_scene(wrench)
+    [hgraph_key] = redis.keys("hgraph:1:hgraph:*")
+    [blob_key] = redis.keys("hgraph:1:blob:*")
+    value = redis.command("GET", hgraph_key)
+    redis.command("SET", hgraph_key, value[:len(value) // 2])  # truncated
+    redis.command("SET", blob_key, b"not the mesh")
+    b = replicas()
+    with b.client() as cb:
+        with pytest.raises(hgraph_client.HgraphError) as e:
+            cb.requery(merged.hgraph, "length")
+        assert e.value.code == grpc.StatusCode.NOT_FOUND and e.value.reason == "HGRAPH_NOT_FOUND"
+        with pytest.raises(hgraph_client.HgraphError) as e:
+            cb.create_session(mesh_scene)
+        assert e.value.code == grpc.StatusCode.NOT_FOUND and e.value.reason == "BLOB_NOT_FOUND"
+        # Still serving.
+        assert merge_on(cb).kept
+    log = "".join(b.log)
+    assert "refused the hgraph" in log and "refused the blob" in log, log
+    assert b.metric("hgraph_store_refused_total") == 2
+
+
+def test_store_down_then_back(replicas, redis):
+    a = replicas()
+    with a.client() as ca:
+        ca.create_session(ca.upload_scene(DATA / "scene.json"))
+        redis.stop(signal.SIGKILL)
+        down = ca.merge(paths(), measure="length", optimize_ms=0)
+        assert down.kept and not down.shared
+        assert ca.requery(down.hgraph, "length").path == down.result.path
+        assert a.metric("hgraph_store_errors_total") >= 1
+        health = subprocess.run(
+            [os.environ.get("HGRAPH_CLI", str(ROOT / "build" / "hgraph")), "health",
+             "--server", a.target], capture_output=True, text=True)
+        assert health.returncode == 0 and "SERVING" in health.stdout, health.stdout
+        redis.start()
+        time.sleep(1.2)  # the store is retried a second after its last failure
+        back = ca.merge(paths(), measure="length", optimize_ms=0)
+        assert back.kept and back.shared
+    assert "serving from memory" in "".join(a.log)
+
+
+def test_redis_restart_loses_nothing(replicas, redis):
+    a = replicas()
+    with a.client() as ca:
+        merged = merge_on(ca)
+    redis.stop()  # SIGTERM: the append-only file is complete
+    redis.start()
+    b = replicas()
+    with b.client() as cb:
+        again = cb.requery(merged.hgraph, "length")
+        assert again.path == merged.result.path and again.stats.collision_checks == 0
+
+
+def test_bad_store_flags_fail_at_startup(tmp_path):
+    for flags, fragment in [
+        (["--store", "redis://h:99999"], "--store: must be"),
+        (["--store", "mysql://h"], "unknown scheme"),
+        (["--store", "redis://u:secret@h"], "--store-password-file"),
+        (["--store-ca-file", str(DATA / "scene.json")], "--store-ca-file: needs --store rediss"),
+    ]:
+        done = subprocess.run([SERVER, "--listen", "127.0.0.1:0", "--metrics-listen", "",
+                               *flags], capture_output=True, text=True, timeout=30)
+        assert done.returncode != 0, flags
+        assert fragment in done.stderr, (flags, done.stderr)
+        assert "secret" not in done.stderr
