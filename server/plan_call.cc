@@ -82,11 +82,11 @@ class PathMergerService::PlanCall final : public grpc::ServerWriteReactor<v1::Pl
       throw InputError("goal", "must be set: the scene has no goal of its own");
     }
     plan.cancel = token_;
-    plan.on_path = [this](int index, const InputPath& path, double elapsed_ms) {
+    plan.on_path = [this](const PlanAttempt& attempt, const InputPath& path) {
       v1::PlanPathsResponse event;
       *event.mutable_path() = PathToProto(path);
-      event.set_index(index);
-      event.set_elapsed_ms(elapsed_ms);
+      event.set_index(attempt.index);
+      event.set_elapsed_ms(attempt.elapsed_ms);
       Send(std::move(event));
     };
     if (request.report_failures()) {

@@ -3,12 +3,17 @@
 #include <ompl/base/PlannerTerminationCondition.h>
 #include <ompl/base/ProblemDefinition.h>
 #include <ompl/base/objectives/PathLengthOptimizationObjective.h>
+#include <ompl/base/samplers/informed/RejectionInfSampler.h>
 #include <ompl/geometric/PathGeometric.h>
+#include <ompl/geometric/planners/informedtrees/AITstar.h>
+#include <ompl/geometric/planners/informedtrees/BITstar.h>
 #include <ompl/geometric/planners/prm/LazyPRM.h>
 #include <ompl/geometric/planners/prm/PRM.h>
 #include <ompl/geometric/planners/prm/PRMstar.h>
+#include <ompl/geometric/planners/rrt/InformedRRTstar.h>
 #include <ompl/geometric/planners/rrt/RRT.h>
 #include <ompl/geometric/planners/rrt/RRTConnect.h>
+#include <ompl/geometric/planners/rrt/RRTstar.h>
 
 #include <chrono>
 #include <cmath>
@@ -38,6 +43,19 @@ class ForestPRM final : public og::PRM {
   }
 };
 
+// Path length whose informed sampler (BIT*, AIT*, Informed RRT* sample within the ellipse of
+// paths that could improve on the best) rejects uniform samples by the cost heuristic: OMPL's
+// direct sampler takes only a bare RealVector, SE2 or SE3 space, and ours is a compound of
+// components (ompl_bridge.h). The heuristic is our weighted distance, so the rejection is exact.
+class CompoundPathLength final : public ob::PathLengthOptimizationObjective {
+ public:
+  using ob::PathLengthOptimizationObjective::PathLengthOptimizationObjective;
+  ob::InformedSamplerPtr allocInformedStateSampler(const ob::ProblemDefinitionPtr& pdef,
+                                                   unsigned int max_calls) const override {
+    return std::make_shared<ob::RejectionInfSampler>(pdef, max_calls);
+  }
+};
+
 ob::PlannerPtr MakePlanner(PlannerType type, const ob::SpaceInformationPtr& si) {
   switch (type) {
     case PlannerType::kPRM: return std::make_shared<ForestPRM>(si);
@@ -46,6 +64,10 @@ ob::PlannerPtr MakePlanner(PlannerType type, const ob::SpaceInformationPtr& si) 
     case PlannerType::kRRT: return std::make_shared<og::RRT>(si);
     case PlannerType::kRRTConnect: return std::make_shared<og::RRTConnect>(si);
     case PlannerType::kLazyPRM: return std::make_shared<og::LazyPRM>(si);
+    case PlannerType::kRRTStar: return std::make_shared<og::RRTstar>(si);
+    case PlannerType::kInformedRRTStar: return std::make_shared<og::InformedRRTstar>(si);
+    case PlannerType::kBITStar: return std::make_shared<og::BITstar>(si, "kBITstar");
+    case PlannerType::kAITStar: return std::make_shared<og::AITstar>(si);
   }
   HGRAPH_CHECK(false);
   return nullptr;
@@ -86,20 +108,49 @@ const char* PlannerTypeName(PlannerType type) {
     case PlannerType::kRRT: return "rrt";
     case PlannerType::kRRTConnect: return "rrtconnect";
     case PlannerType::kLazyPRM: return "lazyprm";
+    case PlannerType::kRRTStar: return "rrtstar";
+    case PlannerType::kInformedRRTStar: return "informed-rrtstar";
+    case PlannerType::kBITStar: return "bitstar";
+    case PlannerType::kAITStar: return "aitstar";
   }
   return "?";
 }
 
+const std::vector<PlannerType>& AllPlannerTypes() {
+  static const std::vector<PlannerType> all = {
+      PlannerType::kPRM,     PlannerType::kPRMCycles,       PlannerType::kPRMStar,
+      PlannerType::kRRT,     PlannerType::kRRTConnect,      PlannerType::kLazyPRM,
+      PlannerType::kRRTStar, PlannerType::kInformedRRTStar, PlannerType::kBITStar,
+      PlannerType::kAITStar};
+  return all;
+}
+
 PlannerType ParsePlannerType(const std::string& name, const std::string& field) {
-  for (PlannerType type : {PlannerType::kPRM, PlannerType::kPRMCycles, PlannerType::kPRMStar,
-                           PlannerType::kRRT, PlannerType::kRRTConnect, PlannerType::kLazyPRM}) {
+  std::string known;
+  for (PlannerType type : AllPlannerTypes()) {
     if (name == PlannerTypeName(type)) return type;
+    known += (known.empty() ? "" : ", ") + std::string(PlannerTypeName(type));
   }
   if (name == "rrt-connect") return PlannerType::kRRTConnect;
   if (name == "prm-star") return PlannerType::kPRMStar;
   if (name == "lazy-prm") return PlannerType::kLazyPRM;
-  throw InputError(field, "unknown planner '" + ClientText(name) +
-                              "' (known: prm, prm-cycles, prmstar, rrt, rrtconnect, lazyprm)");
+  if (name == "rrt-star") return PlannerType::kRRTStar;
+  if (name == "informed-rrt-star") return PlannerType::kInformedRRTStar;
+  if (name == "bit-star") return PlannerType::kBITStar;
+  if (name == "ait-star") return PlannerType::kAITStar;
+  throw InputError(field, "unknown planner '" + ClientText(name) + "' (known: " + known + ")");
+}
+
+bool IsOptimizingPlanner(PlannerType type) {
+  switch (type) {
+    case PlannerType::kPRMCycles:
+    case PlannerType::kPRMStar:
+    case PlannerType::kRRTStar:
+    case PlannerType::kInformedRRTStar:
+    case PlannerType::kBITStar:
+    case PlannerType::kAITStar: return true;
+    default: return false;
+  }
 }
 
 namespace {
@@ -116,7 +167,8 @@ AttemptProblem MakeAttemptProblem(const MotionChecker& checker, const PlanReques
   const Space& space = checker.space();
   auto lock = LockOmplRandomness();
   SeedOmpl(seed);
-  const ob::SpaceInformationPtr si = MakeSpaceInformation(checker, request.resolution);
+  const ob::SpaceInformationPtr si =
+      MakeSpaceInformation(checker, request.resolution, request.motion_check);
   // PRM asks for two samplers (a valid-state sampler over a plain one, and a plain one), the
   // others for one.
   PrepareSamplers(si, 2);
@@ -127,11 +179,10 @@ AttemptProblem MakeAttemptProblem(const MotionChecker& checker, const PlanReques
   // A tolerance of 0 would make RRT's goal test depend on rounding; the path's last state is
   // replaced by the exact goal afterwards.
   problem.pdef->setStartAndGoalStates(s, g, 1e-9);
-  if (request.planner == PlannerType::kPRMCycles) {
-    // An objective whose threshold (0) is never met: PRM keeps improving until the time is up
-    // instead of returning its first solution.
-    problem.pdef->setOptimizationObjective(
-        std::make_shared<ob::PathLengthOptimizationObjective>(si));
+  if (IsOptimizingPlanner(request.planner)) {
+    // An objective whose threshold (0) is never met: the planner keeps improving until the time
+    // is up instead of returning its first solution (PRM with cycles would stop at its first).
+    problem.pdef->setOptimizationObjective(std::make_shared<CompoundPathLength>(si));
   }
   problem.planner = MakePlanner(request.planner, si);
   problem.planner->setProblemDefinition(problem.pdef);
@@ -191,8 +242,14 @@ InputPath AcceptSolution(const MotionChecker& checker, const PlanRequest& reques
   path.waypoints.back() = goal;
   if (path.waypoints.size() == 1) path.waypoints.push_back(goal);
   const int bad = FirstInvalidEdge(checker, path);
+  attempt->certified = bad < 0;
   if (bad >= 0) {
     attempt->invalid_edge = bad;
+    if (request.keep_uncertified) {
+      attempt->status = "kept uncertified: edge " + std::to_string(bad) +
+                        " is invalid under our checker (a merge uses the certified parts)";
+      return path;
+    }
     return Fail(attempt, PlanFailure::kInvalidEdge,
                 "rejected: edge " + std::to_string(bad) + " is invalid under our checker");
   }
@@ -236,7 +293,7 @@ PlanResult PlanPaths(const MotionChecker& checker, const PlanRequest& request) {
       attempt.found = true;
       attempt.waypoints = static_cast<int>(path.waypoints.size());
       attempt.length = PathLength(space, path);
-      if (request.on_path) request.on_path(index, path, attempt.elapsed_ms);
+      if (request.on_path) request.on_path(attempt, path);
       result.paths.push_back(std::move(path));
     }
     result.attempts.push_back(attempt);

@@ -14,6 +14,10 @@
 //   prmstar     OMPL's PRM* (k-nearest with k growing as log n); uses the whole budget.
 //   rrt, rrtconnect, lazyprm
 //               OMPL's RRT, RRT-Connect and LazyPRM; each returns its first solution.
+//   rrtstar, informed-rrtstar, bitstar, aitstar
+//               OMPL's asymptotically optimal RRT*, Informed RRT*, BIT* and AIT* (as prmstar):
+//               given a path-length objective that is never met, each uses its whole time budget
+//               and returns the shortest path it found (IsOptimizingPlanner).
 //
 // Determinism: every path is planned after ompl::RNG::setSeed(f(seed, index)), under a process-
 // wide lock, so OMPL's objects draw the same seeds in the same order. A run is reproducible when
@@ -33,19 +37,40 @@
 #include "core/common/progress.h"
 #include "core/motion/motion_checker.h"
 #include "core/path/path.h"
+#include "core/plan/baselines.h"
 
 namespace hgraph {
 
-enum class PlannerType { kPRM, kPRMCycles, kPRMStar, kRRT, kRRTConnect, kLazyPRM };
+enum class PlannerType {
+  kPRM,
+  kPRMCycles,
+  kPRMStar,
+  kRRT,
+  kRRTConnect,
+  kLazyPRM,
+  kRRTStar,
+  kInformedRRTStar,
+  kBITStar,
+  kAITStar,
+};
 
-// "prm", "prm-cycles", "prmstar", "rrt", "rrtconnect", "lazyprm".
+// Every planner, in the order above.
+const std::vector<PlannerType>& AllPlannerTypes();
+// "prm", "prm-cycles", "prmstar", "rrt", "rrtconnect", "lazyprm", "rrtstar", "informed-rrtstar",
+// "bitstar", "aitstar".
 const char* PlannerTypeName(PlannerType type);
-// Parses the names above (and "rrt-connect", "prm-star", "lazy-prm"); throws InputError naming
-// `field` and listing the known names otherwise.
+// Parses the names above (and "rrt-connect", "prm-star", "lazy-prm", "rrt-star",
+// "informed-rrt-star", "bit-star", "ait-star"); throws InputError naming `field` and listing the
+// known names otherwise.
 PlannerType ParsePlannerType(const std::string& name, const std::string& field);
+// Whether the planner spends its whole time budget improving its path (prm-cycles, prmstar and
+// the four asymptotically optimal ones) rather than stopping at its first solution.
+bool IsOptimizingPlanner(PlannerType type);
 
-// Called once per path found, from the calling thread, before the next path is planned.
-using PathCallback = std::function<void(int index, const InputPath& path, double elapsed_ms)>;
+struct PlanAttempt;
+// Called once per path found, from the calling thread, before the next path is planned;
+// `attempt` says which one it is, its time, and whether it passed our check (certified).
+using PathCallback = std::function<void(const PlanAttempt& attempt, const InputPath& path)>;
 
 // Why an attempt returned no path.
 enum class PlanFailure {
@@ -55,7 +80,6 @@ enum class PlanFailure {
   kInvalidEdge,     // an edge of OMPL's path fails our checker (PlanAttempt.invalid_edge)
 };
 
-struct PlanAttempt;
 // Called once per attempt that found no path, from the calling thread, before the next one.
 using FailureCallback = std::function<void(const PlanAttempt& attempt)>;
 
@@ -71,6 +95,14 @@ struct PlanRequest {
   // Longest motion OMPL checks in one step, as a fraction of the space's extent: pass the local
   // planner's resolution, so that OMPL's own discretisation matches ours.
   double resolution = kDefaultResolution;
+  // How OMPL checks the motions it plans with (baselines.h): kCertified, the check a merge makes
+  // (the paths come out certified, as a rule); kDiscrete, OMPL's own check at the resolution's
+  // samples, as OMPL users run it: faster, but a path may graze an obstacle between samples.
+  OmplMotionCheck motion_check = OmplMotionCheck::kCertified;
+  // Return a path even when an edge of it fails our certified check (PlanAttempt::certified
+  // false, invalid_edge set): a merge still uses its certified parts. Off: such a path is a
+  // failed attempt (PlanFailure::kInvalidEdge).
+  bool keep_uncertified = false;
   PathCallback on_path;        // may be empty
   FailureCallback on_failure;  // may be empty
   CancelToken cancel;  // stops the current run and throws Error(kCancelled/kDeadlineExceeded)
@@ -88,12 +120,17 @@ struct PlanAttempt {
   int waypoints = 0;
   double length = 0;
   PlanFailure failure = PlanFailure::kNone;
-  int invalid_edge = -1;  // with kInvalidEdge: the first edge our checker rejects
+  // With kInvalidEdge, or a path kept uncertified: the first edge our checker rejects.
+  int invalid_edge = -1;
+  // Found, and every edge passed our check (a merge's check of its inputs). A path kept with
+  // keep_uncertified has found true and certified false.
+  bool certified = false;
 };
 
 struct PlanResult {
   // The paths found, in index order; each one starts at `start`, ends at `goal` and passed
-  // MotionChecker::CheckEdge on every edge. Named "<planner>-<index>".
+  // MotionChecker::CheckEdge on every edge, unless keep_uncertified kept it with the attempt's
+  // certified false. Named "<planner>-<index>".
   std::vector<InputPath> paths;
   std::vector<PlanAttempt> attempts;  // one per requested path
 };

@@ -85,11 +85,16 @@ class PlanTest : public ::testing::Test {
 Fixture* PlanTest::maze_ = nullptr;
 
 TEST(PlannerTypeTest, NamesRoundTripAndUnknownNamesAreListed) {
-  for (PlannerType type : {PlannerType::kPRM, PlannerType::kPRMCycles, PlannerType::kPRMStar,
-                           PlannerType::kRRT, PlannerType::kRRTConnect, PlannerType::kLazyPRM}) {
+  EXPECT_EQ(AllPlannerTypes().size(), 10u);
+  for (PlannerType type : AllPlannerTypes()) {
     EXPECT_EQ(ParsePlannerType(PlannerTypeName(type), "planner"), type);
   }
   EXPECT_EQ(ParsePlannerType("rrt-connect", "planner"), PlannerType::kRRTConnect);
+  EXPECT_EQ(ParsePlannerType("bit-star", "planner"), PlannerType::kBITStar);
+  EXPECT_EQ(ParsePlannerType("informed-rrt-star", "planner"), PlannerType::kInformedRRTStar);
+  EXPECT_TRUE(IsOptimizingPlanner(PlannerType::kBITStar));
+  EXPECT_TRUE(IsOptimizingPlanner(PlannerType::kPRMStar));
+  EXPECT_FALSE(IsOptimizingPlanner(PlannerType::kRRTConnect));
   try {
     ParsePlannerType("est", "--planner");
     FAIL() << "no error";
@@ -97,6 +102,32 @@ TEST(PlannerTypeTest, NamesRoundTripAndUnknownNamesAreListed) {
     EXPECT_EQ(e.field(), "--planner");
     EXPECT_NE(std::string(e.what()).find("unknown planner 'est'"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("prm-cycles"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("bitstar"), std::string::npos) << e.what();
+  }
+}
+
+// The asymptotically optimal planners on the maze: each keeps improving until its time is up
+// (it does not stop at its first solution) and returns a path our checker certifies, as a merge
+// would check it, between the exact endpoints.
+TEST_F(PlanTest, OptimizingPlannersSpendTheirTimeAndReturnCertifiedPaths) {
+  for (PlannerType type : {PlannerType::kRRTStar, PlannerType::kInformedRRTStar,
+                           PlannerType::kBITStar, PlannerType::kAITStar, PlannerType::kPRMStar}) {
+    SCOPED_TRACE(PlannerTypeName(type));
+    PlanRequest request = MazeRequest(*maze_, type, 5);
+    request.count = 1;
+    request.time_s = 0.4;
+    const PlanResult result = PlanPaths(*maze_->planner, request);
+    ASSERT_EQ(result.paths.size(), 1u) << result.attempts[0].status;
+    const PlanAttempt& attempt = result.attempts[0];
+    EXPECT_TRUE(attempt.found);
+    EXPECT_TRUE(attempt.certified);
+    EXPECT_EQ(attempt.invalid_edge, -1);
+    // The termination condition is the budget alone: the run lasts at least that long.
+    EXPECT_GE(attempt.elapsed_ms, 0.9 * request.time_s * 1e3) << attempt.status;
+    EXPECT_EQ(result.paths[0].name, std::string(PlannerTypeName(type)) + "-0");
+    EXPECT_EQ(result.paths[0].waypoints.front(), *maze_->scene->start);
+    EXPECT_EQ(result.paths[0].waypoints.back(), *maze_->scene->goal);
+    ExpectValid(*maze_->planner, result.paths[0]);
   }
 }
 
@@ -108,8 +139,9 @@ TEST_F(PlanTest, EveryPlannerFindsValidPathsWithExactEndpoints) {
     // The planners that use their whole budget need not run for long on a 2D maze.
     if (type == PlannerType::kPRMCycles || type == PlannerType::kPRMStar) request.time_s = 0.5;
     int callbacks = 0;
-    request.on_path = [&](int index, const InputPath& path, double) {
-      EXPECT_EQ(index, callbacks++);
+    request.on_path = [&](const PlanAttempt& attempt, const InputPath& path) {
+      EXPECT_EQ(attempt.index, callbacks++);
+      EXPECT_TRUE(attempt.certified);
       EXPECT_FALSE(path.waypoints.empty());
     };
     const PlanResult result = PlanPaths(*maze_->planner, request);
@@ -214,7 +246,7 @@ TEST(PlanNoPathTest, EachFailedAttemptReachesOnFailureWithItsReasonAndSeed) {
                           .count = 3,
                           .time_s = 0.05,
                           .seed = 42,
-                          .on_path = [&](int, const InputPath&, double) { ++paths; },
+                          .on_path = [&](const PlanAttempt&, const InputPath&) { ++paths; },
                           .on_failure = [&](const PlanAttempt& a) { failures.push_back(a); }});
   EXPECT_EQ(paths, 0);
   ASSERT_EQ(failures.size(), 3u);
@@ -515,6 +547,58 @@ TEST(OmplAsShippedTest, DiscreteChecksCrossAWallThinnerThanAStep) {
   EXPECT_TRUE(check.paths[1].valid);
   EXPECT_TRUE(check.paths[1].certified);
   EXPECT_LT(Length(scene->space, shipped), Length(scene->space, certified));
+}
+
+// A planner that checks its motions at samples only (sampled_motions) crosses the thin wall
+// between two samples. Its path fails our check: a failed attempt by default, and with
+// keep_uncertified the same path is returned, reported uncertified at the edge that crosses.
+TEST(OmplAsShippedTest, UncertifiedPathsAreKeptOnlyWhenAskedAndReportedAsSuch) {
+  auto scene = std::make_shared<Scene>(Scene{
+      .name = "thin wall",
+      .space = Space::RealVector(Eigen::Vector2d(0, 0), Eigen::Vector2d(10, 10)),
+  });
+  Obstacle wall{.name = "wall",
+                .shape = Shape{.type = ShapeType::kBox, .box_size = Eigen::Vector3d(0.02, 9, 1)}};
+  wall.pose.translation() = Eigen::Vector3d(5, 4.5, 0);
+  scene->obstacles.push_back(wall);
+  scene->robot.push_back(RobotBody{.shape = Shape{.type = ShapeType::kSphere, .radius = 0}});
+  const double resolution = 0.05;
+  const LocalPlanner planner(std::make_shared<CollisionWorld>(scene), {.resolution = resolution});
+  PlanRequest request{.planner = PlannerType::kRRTConnect,
+                      .start = Eigen::Vector2d(1, 1),
+                      .goal = Eigen::Vector2d(9.5, 1),
+                      .count = 1,
+                      .time_s = 2,
+                      .seed = 3,
+                      .resolution = resolution,
+                      .motion_check = OmplMotionCheck::kDiscrete};
+  const PlanResult rejected = PlanPaths(planner, request);
+  ASSERT_EQ(rejected.attempts.size(), 1u);
+  EXPECT_TRUE(rejected.paths.empty());
+  EXPECT_EQ(rejected.attempts[0].failure, PlanFailure::kInvalidEdge);
+  EXPECT_FALSE(rejected.attempts[0].certified);
+
+  request.keep_uncertified = true;
+  std::vector<PlanAttempt> streamed;
+  request.on_path = [&](const PlanAttempt& a, const InputPath&) { streamed.push_back(a); };
+  const PlanResult kept = PlanPaths(planner, request);
+  ASSERT_EQ(kept.paths.size(), 1u);
+  const PlanAttempt& a = kept.attempts[0];
+  EXPECT_TRUE(a.found);
+  EXPECT_FALSE(a.certified);
+  EXPECT_EQ(a.failure, PlanFailure::kNone);
+  EXPECT_EQ(a.invalid_edge, rejected.attempts[0].invalid_edge);
+  ASSERT_EQ(streamed.size(), 1u);
+  EXPECT_FALSE(streamed[0].certified);
+  EXPECT_EQ(streamed[0].invalid_edge, a.invalid_edge);
+  const PathCheckResult check = CheckPaths(planner, {.paths = kept.paths});
+  EXPECT_FALSE(check.paths[0].valid);
+  EXPECT_EQ(check.paths[0].invalid_edge, a.invalid_edge);
+  // The same planner checking motions as a merge does keeps to the free side of the wall.
+  request.motion_check = OmplMotionCheck::kCertified;
+  const PlanResult certified = PlanPaths(planner, request);
+  ASSERT_EQ(certified.paths.size(), 1u) << certified.attempts[0].status;
+  EXPECT_TRUE(certified.attempts[0].certified);
 }
 
 }  // namespace

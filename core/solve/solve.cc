@@ -1,0 +1,416 @@
+#include "core/solve/solve.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <condition_variable>
+#include <cstdio>
+#include <deque>
+#include <exception>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <utility>
+
+#include "core/common/error.h"
+
+namespace hgraph {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// A run shorter than this is not started: OMPL's setup alone takes about as long.
+constexpr double kMinRunS = 0.005;
+// The merge's hard stop, past the budget: a query that would run longer is abandoned and the
+// best result found before it stands (the deadline is honoured within 10%).
+constexpr double kHardStopShare = 0.05;
+// The last post-optimization ends this share of the budget (at least kMinMarginS) before the
+// budget's end, for the query's own finish (the final search, the report).
+constexpr double kMarginShare = 0.03;
+constexpr double kMinMarginS = 0.005;
+// While planners run, each query's post-optimization gets at most this share of the budget, so
+// that the paths that arrive meanwhile wait little.
+constexpr double kInterimOptimizeShare = 0.05;
+
+std::string Seconds(double s) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%g s", s);
+  return text;
+}
+
+double MsBetween(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+// The runs of a portfolio in the order they start: the planners that stop at their first
+// solution first (their paths arrive early, and then leave the optimizing ones the rest of the
+// time), then the optimizing ones, kinds interleaved so that each wave mixes them.
+std::vector<PlannerType> RunOrder(const std::vector<PortfolioEntry>& portfolio) {
+  std::vector<PlannerType> order;
+  for (bool optimizing : {false, true}) {
+    std::vector<PortfolioEntry> left;
+    for (const PortfolioEntry& e : portfolio) {
+      if (IsOptimizingPlanner(e.planner) == optimizing) left.push_back(e);
+    }
+    bool any = true;
+    while (any) {
+      any = false;
+      for (PortfolioEntry& e : left) {
+        if (e.runs > 0) {
+          order.push_back(e.planner);
+          --e.runs;
+          any = true;
+        }
+      }
+    }
+  }
+  return order;
+}
+
+// The planner runs, shared by the planner threads and the merging thread. Thread safe.
+class RunBoard {
+ public:
+  RunBoard(std::vector<PlannerType> order, int parallel, Clock::time_point started,
+           Clock::time_point plan_end)
+      : order_(std::move(order)), parallel_(parallel), started_(started), plan_end_(plan_end) {
+    for (PlannerType type : order_) optimizing_left_ += IsOptimizingPlanner(type) ? 1 : 0;
+  }
+
+  // The next run to start and its time, or false when there is none (or no time left for one).
+  bool Next(int* index, PlannerType* planner, double* time_s, double* start_ms) {
+    std::lock_guard lock(mutex_);
+    if (stopped_ || next_ >= static_cast<int>(order_.size())) return false;
+    const Clock::time_point now = Clock::now();
+    const double left_s = std::chrono::duration<double>(plan_end_ - now).count();
+    if (left_s < kMinRunS) return false;
+    *index = next_++;
+    *planner = order_[*index];
+    *start_ms = MsBetween(started_, now);
+    if (IsOptimizingPlanner(*planner)) {
+      // The optimizing runs not started yet share what is left, `parallel_` at a time.
+      const int waves = (optimizing_left_ + parallel_ - 1) / parallel_;
+      --optimizing_left_;
+      *time_s = left_s / std::max(1, waves);
+    } else {
+      *time_s = left_s;  // it stops at its first path
+    }
+    return true;
+  }
+
+  // A run has ended (with its path, when found).
+  void Finish(SolveRun run, InputPath path) {
+    {
+      std::lock_guard lock(mutex_);
+      ended_.push_back({std::move(run), std::move(path)});
+    }
+    changed_.notify_all();
+  }
+  // A planner thread has no more runs to start.
+  void ThreadDone() {
+    {
+      std::lock_guard lock(mutex_);
+      ++threads_done_;
+    }
+    changed_.notify_all();
+  }
+  // No further run starts (the ones running go on until their planner stops).
+  void Stop() {
+    std::lock_guard lock(mutex_);
+    stopped_ = true;
+  }
+
+  // Waits until a run ends, every thread is done, or `until`; takes the runs that ended.
+  // Returns whether every planner thread is done.
+  bool Wait(Clock::time_point until, int threads,
+            std::vector<std::pair<SolveRun, InputPath>>* ended) {
+    std::unique_lock lock(mutex_);
+    changed_.wait_until(lock, until, [&] { return !ended_.empty() || threads_done_ == threads; });
+    for (auto& e : ended_) ended->push_back(std::move(e));
+    ended_.clear();
+    return threads_done_ == threads;
+  }
+
+  // The runs that never started (no time was left for them).
+  std::vector<PlannerType> NotStarted() const {
+    std::lock_guard lock(mutex_);
+    return {order_.begin() + next_, order_.end()};
+  }
+
+ private:
+  const std::vector<PlannerType> order_;
+  const int parallel_;
+  const Clock::time_point started_;
+  const Clock::time_point plan_end_;
+  mutable std::mutex mutex_;
+  std::condition_variable changed_;
+  int next_ = 0;
+  int optimizing_left_ = 0;
+  int threads_done_ = 0;
+  bool stopped_ = false;
+  std::deque<std::pair<SolveRun, InputPath>> ended_;
+};
+
+// One planner thread: starts runs until the board has none left.
+void PlanRuns(const MotionChecker& checker, const SolveRequest& request, RunBoard* board,
+              const CancelToken& stop) {
+  int index = 0;
+  PlannerType planner = PlannerType::kPRM;
+  double time_s = 0;
+  double start_ms = 0;
+  while (!stop.stopped() && board->Next(&index, &planner, &time_s, &start_ms)) {
+    SolveRun run{.planner = planner, .index = index, .time_s = time_s, .start_ms = start_ms};
+    InputPath path;
+    try {
+      PlanResult planned =
+          PlanPaths(checker, PlanRequest{.planner = planner,
+                                         .start = request.start,
+                                         .goal = request.goal,
+                                         .count = 1,
+                                         .time_s = time_s,
+                                         .seed = PlanAttemptSeed(request.seed, index),
+                                         .resolution = request.resolution,
+                                         .keep_uncertified = true,
+                                         .cancel = stop});
+      const PlanAttempt& attempt = planned.attempts.at(0);
+      run.seed = attempt.seed;
+      run.elapsed_ms = attempt.elapsed_ms;
+      run.found = attempt.found;
+      run.certified = attempt.certified;
+      run.length = attempt.length;
+      run.status = attempt.status;
+      if (!planned.paths.empty()) {
+        path = std::move(planned.paths.front());
+        path.name = std::string(PlannerTypeName(planner)) + "-" + std::to_string(index);
+        run.path_name = path.name;
+      }
+    } catch (const std::exception& e) {
+      // Cancelled, or a planner that failed: the run found nothing.
+      run.status = e.what();
+    }
+    board->Finish(std::move(run), std::move(path));
+  }
+  board->ThreadDone();
+}
+
+}  // namespace
+
+std::vector<PortfolioEntry> DefaultPortfolio() {
+  return {{.planner = PlannerType::kPRM, .runs = 4},
+          {.planner = PlannerType::kBITStar, .runs = 2},
+          {.planner = PlannerType::kRRTStar, .runs = 1}};
+}
+
+SolveRequest ResolveSolveRequest(const MotionChecker& checker, const SolveRequest& request) {
+  SolveRequest out = request;
+  if (!std::isfinite(request.budget_s) || request.budget_s < kMinSolveBudgetS ||
+      request.budget_s > kMaxSolveBudgetS) {
+    throw InputError("budget_s", "must be in [" + Seconds(kMinSolveBudgetS) + ", " +
+                                     Seconds(kMaxSolveBudgetS) + "], got " +
+                                     std::to_string(request.budget_s));
+  }
+  if (out.portfolio.empty()) out.portfolio = DefaultPortfolio();
+  int runs = 0;
+  for (size_t i = 0; i < out.portfolio.size(); ++i) {
+    const int n = out.portfolio[i].runs;
+    if (n < 1 || n > kMaxSolveRuns) {
+      throw InputError(
+          "portfolio[" + std::to_string(i) + "].runs",
+          "must be in [1, " + std::to_string(kMaxSolveRuns) + "], got " + std::to_string(n));
+    }
+    runs += n;
+  }
+  if (runs > kMaxSolveRuns) {
+    throw InputError("portfolio", "has " + std::to_string(runs) + " runs in all; at most " +
+                                      std::to_string(kMaxSolveRuns));
+  }
+  if (out.plan_fraction < 0) {
+    out.plan_fraction = kDefaultPlanFraction;
+  } else if (!(out.plan_fraction > 0 && out.plan_fraction <= 1)) {
+    throw InputError("plan_fraction",
+                     "must be in (0, 1], got " + std::to_string(request.plan_fraction));
+  }
+  if (out.parallel < 0 || out.parallel > kMaxSolveRuns) {
+    throw InputError("parallel", "must be in [0, " + std::to_string(kMaxSolveRuns) +
+                                     "] (0 = the merge's threads), got " +
+                                     std::to_string(out.parallel));
+  }
+  if (out.parallel == 0) {
+    out.parallel = out.merge.threads > 0
+                       ? out.merge.threads
+                       : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  }
+  out.parallel = std::min(out.parallel, runs);
+  if (out.merge.optimize_ms > 0) {
+    throw InputError("merge.optimize_ms",
+                     "must be unset (the budget sets the post-optimization's time) or 0 (off)");
+  }
+  ValidateMeasure(out.measure);
+  const Space& space = checker.space();
+  for (const auto& [q, field] : {std::pair{&out.start, "start"}, std::pair{&out.goal, "goal"}}) {
+    space.Validate(*q, field);
+    if (!space.InBounds(*q)) throw InputError(field, "is outside the space's bounds");
+    *q = space.Normalize(*q);
+    if (!checker.IsValid(*q)) throw InputError(field, "is in collision");
+  }
+  return out;
+}
+
+SolveResult Solve(const ClearanceChecker& checker, const SolveRequest& raw) {
+  const Clock::time_point started = Clock::now();
+  const SolveRequest request = ResolveSolveRequest(checker, raw);
+  const auto at = [&](double s) {
+    return started + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
+  };
+  const double budget = request.budget_s;
+  const Clock::time_point plan_end = at(budget * request.plan_fraction);
+  const Clock::time_point end = at(budget);
+  const Clock::time_point optimize_end = at(budget - std::max(kMinMarginS, budget * kMarginShare));
+  const std::unique_ptr<const Measure> measure = Measure::Make(request.measure);
+
+  // The planners stop on a cancel only (each run's own time ends it within the planning time);
+  // the merge also at the hard stop past the budget. A watcher passes the caller's cancel on.
+  const CancelToken planners;
+  const CancelToken merging;
+  merging.SetDeadline(at(budget * (1 + kHardStopShare)));
+  RunBoard board(RunOrder(request.portfolio), request.parallel, started, plan_end);
+  std::atomic<bool> finished{false};
+  std::thread watcher([&] {
+    while (!finished.load()) {
+      if (request.cancel.stopped()) {
+        planners.Cancel();
+        merging.Cancel();
+        board.Stop();
+        return;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+  });
+  std::vector<std::thread> threads;
+  threads.reserve(request.parallel);
+  for (int t = 0; t < request.parallel; ++t) {
+    threads.emplace_back([&] { PlanRuns(checker, request, &board, planners); });
+  }
+
+  SolveResult out;
+  std::optional<MergeResult> best;
+  std::vector<InputPath> pending;  // paths not in an H-Graph yet (none certified so far)
+  bool all_done = false;
+  bool final_query = false;  // a query ran after the last path, with the long post-optimization
+  bool stopped = false;      // the hard stop (or a cancel) interrupted a query
+  MergeOptions options = request.merge;
+  const auto query = [&](bool last) {
+    const Clock::time_point until =
+        last ? optimize_end
+             : std::min(plan_end, Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                                     std::chrono::duration<double>(
+                                                         budget * kInterimOptimizeShare)));
+    try {
+      if (!out.session) {
+        out.session =
+            std::make_unique<HybridizationSession>(checker, MergeRequest{.paths = pending,
+                                                                         .measure = request.measure,
+                                                                         .options = options,
+                                                                         .cancel = merging});
+        pending.clear();
+      } else if (!pending.empty()) {
+        out.session->AddPaths(pending, {}, merging);
+        pending.clear();
+      }
+      MergeResult r = out.session->Query(request.measure, {}, merging, std::nullopt, until);
+      // A result as good as the best replaces it (its report covers more inputs); only a better
+      // one is an update.
+      const bool better = !best || measure->Better(r.quality, best->quality);
+      if (better || !measure->Better(best->quality, r.quality)) best = std::move(r);
+      if (better) {
+        ++out.updates;
+        if (request.on_update) {
+          request.on_update(SolveUpdate{.objective = best->objective,
+                                        .elapsed_ms = MsSince(started),
+                                        .inputs = static_cast<int>(out.inputs.size()),
+                                        .path = std::make_shared<InputPath>(best->path)});
+        }
+      }
+    } catch (const Error& e) {
+      if (e.code() == ErrorCode::kFailedPrecondition) return;  // no certified path yet
+      if (e.code() == ErrorCode::kCancelled || e.code() == ErrorCode::kDeadlineExceeded) {
+        stopped = true;
+        return;
+      }
+      throw;
+    }
+  };
+
+  try {
+    while (!stopped) {
+      std::vector<std::pair<SolveRun, InputPath>> ended;
+      all_done = board.Wait(end, request.parallel, &ended);
+      for (auto& [run, path] : ended) {
+        if (request.on_run) request.on_run(run);
+        if (!path.waypoints.empty()) {
+          out.inputs.push_back(path);
+          pending.push_back(std::move(path));
+        }
+        out.runs.push_back(std::move(run));
+      }
+      if (all_done && out.plan_ms == 0) out.plan_ms = MsSince(started);
+      if (request.cancel.stopped() || Clock::now() >= end) break;
+      if (!pending.empty()) {
+        query(all_done);
+        final_query = all_done;
+      }
+      if (all_done) break;
+    }
+    if (!stopped && !final_query && !request.cancel.stopped() && Clock::now() < optimize_end &&
+        (out.session || !pending.empty())) {
+      query(true);
+    }
+  } catch (...) {
+    finished = true;
+    planners.Cancel();
+    board.Stop();
+    for (std::thread& t : threads) t.join();
+    watcher.join();
+    throw;
+  }
+  finished = true;
+  planners.Cancel();
+  board.Stop();
+  for (std::thread& t : threads) t.join();
+  watcher.join();
+  request.cancel.ThrowIfStopped();
+  if (out.plan_ms == 0) out.plan_ms = MsSince(started);
+
+  // The runs that were still going at the end, and those that never started.
+  std::vector<std::pair<SolveRun, InputPath>> late;
+  board.Wait(Clock::now(), request.parallel, &late);
+  for (auto& [run, path] : late) {
+    if (request.on_run) request.on_run(run);
+    out.runs.push_back(std::move(run));
+  }
+  std::sort(out.runs.begin(), out.runs.end(),
+            [](const SolveRun& a, const SolveRun& b) { return a.index < b.index; });
+  int index = static_cast<int>(out.runs.size());
+  for (PlannerType type : board.NotStarted()) {
+    out.runs.push_back(SolveRun{
+        .planner = type, .index = index++, .status = "not started: the planning time had run out"});
+  }
+
+  out.found = best.has_value();
+  if (best) {
+    out.result = std::move(*best);
+  } else {
+    int found = 0;
+    for (const SolveRun& run : out.runs) found += run.found ? 1 : 0;
+    out.message = found == 0
+                      ? "no path found in " + Seconds(budget) + ": none of the " +
+                            std::to_string(out.runs.size()) + " planner runs found one"
+                      : "no path found in " + Seconds(budget) + ": the " + std::to_string(found) +
+                            " paths the planners found have no certified way from start to goal" +
+                            (stopped ? " that the merge could establish in time" : "");
+  }
+  out.elapsed_ms = MsSince(started);
+  return out;
+}
+
+}  // namespace hgraph

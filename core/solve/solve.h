@@ -1,0 +1,126 @@
+// Solve: the best certified path within a time budget, from a portfolio of planners whose paths
+// are merged into one H-Graph as they arrive ("a little more, a lot better" as one call).
+//
+// Planners (core/plan) run on threads of their own, as many at once as SolveRequest::parallel
+// says; the calling thread adds each path to the H-Graph as it arrives (the AddPaths code path
+// of HybridizationSession), searches it again and reports the best certified path so far. When
+// every planner has stopped (at the latest when the planning share of the budget ends), the
+// last query's post-optimization runs until the budget's end. The H-Graph is returned for
+// re-queries and additions, as a merge's.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/common/progress.h"
+#include "core/merge/merge.h"
+#include "core/motion/motion_checker.h"
+#include "core/path/path.h"
+#include "core/plan/plan.h"
+
+namespace hgraph {
+
+// One kind of planner in a portfolio and how many runs of it (each with its own seed).
+struct PortfolioEntry {
+  PlannerType planner = PlannerType::kPRM;
+  int runs = 1;
+};
+
+// The portfolio used when the request names none (docs/performance.md, "Solve", says how it was
+// chosen).
+std::vector<PortfolioEntry> DefaultPortfolio();
+// The default share of the budget given to planning (SolveRequest::plan_fraction).
+inline constexpr double kDefaultPlanFraction = 0.7;
+// Limits of a request (range-checked, errors naming the field).
+inline constexpr double kMinSolveBudgetS = 0.01;
+inline constexpr double kMaxSolveBudgetS = 3600;
+inline constexpr int kMaxSolveRuns = 64;
+
+// One planner run of a Solve.
+struct SolveRun {
+  PlannerType planner = PlannerType::kPRM;
+  int index = 0;        // in the order the runs started, from 0
+  uint64_t seed = 0;    // the seed OMPL got (PlanAttemptSeed of the run's seed)
+  double time_s = 0;    // the time it was given
+  double start_ms = 0;  // when it started, from the start of the Solve
+  double elapsed_ms = 0;
+  bool found = false;
+  // Every edge passed the merge's check; a path found but not certified still goes into the
+  // H-Graph (the merge uses its certified parts).
+  bool certified = false;
+  double length = 0;      // of its path, when found
+  std::string status;     // OMPL's status, or why it found no path
+  std::string path_name;  // its path's name in the H-Graph ("bitstar-3"), when found
+};
+
+// The best certified path so far (SolveRequest::on_update).
+struct SolveUpdate {
+  double objective = 0;  // under the request's measure
+  double elapsed_ms = 0;
+  int inputs = 0;  // paths in the H-Graph when it was found
+  std::shared_ptr<const InputPath> path;
+  // "merge": the H-Graph's best path (maybe post-optimized); else the best input it took.
+};
+
+struct SolveRequest {
+  Config start;
+  Config goal;
+  MeasureSpec measure;
+  // The merge's options. optimize_ms: < 0 (automatic) spends what is left of the budget on the
+  // post-optimization of the last query, 0 turns it off; a positive value is an error (the
+  // budget sets it). threads: the merge's threads (0 = all cores).
+  MergeOptions merge;
+  // The whole call's wall time, in [kMinSolveBudgetS, kMaxSolveBudgetS]: planning, merging,
+  // post-optimization. The result comes within 10% of it, as a rule.
+  double budget_s = 3;
+  // Empty: DefaultPortfolio(). At most kMaxSolveRuns runs in all.
+  std::vector<PortfolioEntry> portfolio;
+  // Share of the budget in which planners may run, in (0, 1]; < 0: kDefaultPlanFraction. The
+  // rest (and whatever the planners leave) goes to merging their paths.
+  double plan_fraction = -1;
+  // Planner runs at once; 0: merge.threads (all cores if that is 0).
+  int parallel = 0;
+  uint64_t seed = 1;  // run i plans with seed PlanAttemptSeed(seed, i)
+  double resolution = kDefaultResolution;
+  // Called from the calling thread each time the best certified path improves.
+  std::function<void(const SolveUpdate&)> on_update;
+  // Called from the calling thread as each run ends (found or not), in the order they end.
+  std::function<void(const SolveRun&)> on_run;
+  // Stops every planner and the merge: Solve throws Error(kCancelled). Its deadline, if set,
+  // stops the call as a cancel does.
+  CancelToken cancel;
+};
+
+struct SolveResult {
+  // A certified path was found: `result` holds it, `session` the H-Graph it came from.
+  bool found = false;
+  // Without a path: why (no run found one in time, or none of their paths had a certified
+  // stretch from start to goal).
+  std::string message;
+  // Every path the planners found, in the order they went into the H-Graph. Null when none.
+  std::unique_ptr<HybridizationSession> session;
+  // The best result under the measure: the last query's, or an earlier one's if that was
+  // better (the post-optimization is random), whose `inputs` are then the paths merged so far.
+  MergeResult result;
+  std::vector<InputPath> inputs;  // in the H-Graph's order
+  std::vector<SolveRun> runs;     // in the order they started
+  double plan_ms = 0;             // when the last planner stopped
+  double elapsed_ms = 0;
+  int updates = 0;  // on_update calls
+};
+
+// Resolves the request's defaults (portfolio, plan fraction, parallel runs) and validates it:
+// InputError naming "budget_s", "portfolio[i].runs", "portfolio", "plan_fraction", "parallel",
+// "merge.optimize_ms", "start" or "goal" (wrong dimension, out of bounds, in collision).
+SolveRequest ResolveSolveRequest(const MotionChecker& checker, const SolveRequest& request);
+
+// Runs the portfolio and merges its paths within request.budget_s. Throws InputError as
+// ResolveSolveRequest and Error(kCancelled / kDeadlineExceeded) when request.cancel stops it.
+// A budget in which no planner finds a path is not an error: found is false, with a message.
+SolveResult Solve(const ClearanceChecker& checker, const SolveRequest& request);
+
+}  // namespace hgraph

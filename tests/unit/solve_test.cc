@@ -1,0 +1,227 @@
+// Solve on a real scene (the built-in maze): a portfolio of OMPL planners whose paths are merged
+// as they arrive. Budgets are short and no assertion is about time.
+#include "core/solve/solve.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <future>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "core/adapter/scene_proto.h"
+#include "core/collision/collision_world.h"
+#include "core/common/error.h"
+#include "core/merge/path_check.h"
+#include "core/motion/local_planner.h"
+
+namespace hgraph {
+namespace {
+
+struct Fixture {
+  std::shared_ptr<const Scene> scene;
+  std::unique_ptr<LocalPlanner> planner;
+  double resolution = 0;
+};
+
+Fixture LoadMaze() {
+  const std::string file = std::string(HGRAPH_SOURCE_DIR) + "/scenes/maze/scene.json";
+  Fixture f;
+  f.resolution = SceneResolution(ReadSceneFile(file));
+  f.scene = LoadSceneFile(file);
+  f.planner = std::make_unique<LocalPlanner>(std::make_shared<const CollisionWorld>(f.scene),
+                                             LocalPlannerOptions{.resolution = f.resolution});
+  return f;
+}
+
+class SolveTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() { maze_ = new Fixture(LoadMaze()); }
+  static void TearDownTestSuite() {
+    delete maze_;
+    maze_ = nullptr;
+  }
+  static SolveRequest MazeRequest() {
+    return SolveRequest{.start = *maze_->scene->start,
+                        .goal = *maze_->scene->goal,
+                        .merge = {.threads = 2},
+                        .budget_s = 1.0,
+                        .seed = 7,
+                        .resolution = maze_->resolution};
+  }
+  static Fixture* maze_;
+};
+Fixture* SolveTest::maze_ = nullptr;
+
+// Every run's path goes into one H-Graph; the result is certified, between the exact ends, no
+// longer than any certified input, and each update improves on the one before.
+TEST_F(SolveTest, MergesThePortfolioIntoACertifiedPathNoLongerThanItsInputs) {
+  SolveRequest request = MazeRequest();
+  request.portfolio = {{.planner = PlannerType::kPRM, .runs = 3},
+                       {.planner = PlannerType::kRRTConnect, .runs = 2}};
+  std::vector<SolveUpdate> updates;
+  std::vector<SolveRun> ended;
+  request.on_update = [&](const SolveUpdate& u) { updates.push_back(u); };
+  request.on_run = [&](const SolveRun& r) { ended.push_back(r); };
+  const SolveResult result = Solve(*maze_->planner, request);
+  ASSERT_TRUE(result.found) << result.message;
+  ASSERT_NE(result.session, nullptr);
+  EXPECT_EQ(result.runs.size(), 5u);
+  EXPECT_EQ(ended.size(), result.runs.size());
+  int found = 0;
+  for (size_t i = 0; i < result.runs.size(); ++i) {
+    EXPECT_EQ(result.runs[i].index, static_cast<int>(i));
+    if (result.runs[i].found) ++found;
+  }
+  EXPECT_GE(found, 1);
+  EXPECT_EQ(static_cast<int>(result.inputs.size()), found);
+  EXPECT_EQ(result.session->graph().num_paths(), found);
+  // The best result's report covers the paths merged when it was found.
+  EXPECT_GE(static_cast<int>(result.result.inputs.size()), 1);
+  EXPECT_LE(static_cast<int>(result.result.inputs.size()), found);
+
+  const InputPath& path = result.result.path;
+  EXPECT_EQ(path.waypoints.front(), *maze_->scene->start);
+  EXPECT_EQ(path.waypoints.back(), *maze_->scene->goal);
+  const PathCheckResult check = CheckPaths(*maze_->planner, {.paths = {path}});
+  EXPECT_TRUE(check.paths[0].valid);
+  EXPECT_TRUE(check.paths[0].certified);
+  const Space& space = maze_->scene->space;
+  EXPECT_NEAR(result.result.objective, PathLength(space, path), 1e-9);
+  for (const SolveRun& run : result.runs) {
+    if (run.found && run.certified) {
+      EXPECT_LE(result.result.objective, run.length + 1e-9);
+    }
+  }
+  ASSERT_EQ(static_cast<int>(updates.size()), result.updates);
+  ASSERT_GE(updates.size(), 1u);
+  for (size_t i = 1; i < updates.size(); ++i) {
+    EXPECT_LT(updates[i].objective, updates[i - 1].objective);
+  }
+  EXPECT_NEAR(updates.back().objective, result.result.objective, 1e-9);
+}
+
+// The H-Graph serves later queries and additions as a merge's does.
+TEST_F(SolveTest, TheHGraphServesQueriesAndAdditions) {
+  SolveRequest request = MazeRequest();
+  request.portfolio = {{.planner = PlannerType::kRRTConnect, .runs = 3}};
+  request.merge.optimize_ms = 0;
+  SolveResult result = Solve(*maze_->planner, request);
+  ASSERT_TRUE(result.found) << result.message;
+  const MergeResult again = result.session->Query({});
+  EXPECT_NEAR(again.objective, result.result.objective, 1e-9);
+  const PlanResult more = PlanPaths(*maze_->planner, {.planner = PlannerType::kPRM,
+                                                      .start = request.start,
+                                                      .goal = request.goal,
+                                                      .seed = 99,
+                                                      .resolution = maze_->resolution});
+  ASSERT_EQ(more.paths.size(), 1u);
+  const int before = result.session->graph().num_paths();
+  result.session->AddPaths(more.paths);
+  EXPECT_EQ(result.session->graph().num_paths(), before + 1);
+  EXPECT_LE(result.session->Query({}).objective, again.objective + 1e-9);
+}
+
+// The default portfolio runs asymptotically optimal planners beside PRM.
+TEST_F(SolveTest, DefaultPortfolioRunsEveryKindItNames) {
+  SolveRequest request = MazeRequest();
+  const SolveResult result = Solve(*maze_->planner, request);
+  ASSERT_TRUE(result.found) << result.message;
+  int runs = 0;
+  for (const PortfolioEntry& e : DefaultPortfolio()) {
+    runs += e.runs;
+    bool seen = false;
+    for (const SolveRun& run : result.runs) seen = seen || run.planner == e.planner;
+    EXPECT_TRUE(seen) << PlannerTypeName(e.planner);
+  }
+  EXPECT_EQ(static_cast<int>(result.runs.size()), runs);
+}
+
+TEST_F(SolveTest, BadRequestsNameTheField) {
+  const auto field_of = [&](const SolveRequest& request) -> std::string {
+    try {
+      Solve(*maze_->planner, request);
+    } catch (const InputError& e) {
+      return e.field() + " | " + e.what();
+    }
+    return "no error";
+  };
+  SolveRequest r = MazeRequest();
+  r.budget_s = 0;
+  EXPECT_EQ(field_of(r).substr(0, 11), "budget_s | ") << field_of(r);
+  r = MazeRequest();
+  r.budget_s = 1e9;
+  EXPECT_EQ(field_of(r).substr(0, 11), "budget_s | ");
+  r = MazeRequest();
+  r.portfolio = {{.planner = PlannerType::kPRM, .runs = 1},
+                 {.planner = PlannerType::kRRT, .runs = 0}};
+  EXPECT_EQ(field_of(r).substr(0, 20), "portfolio[1].runs | ") << field_of(r);
+  r = MazeRequest();
+  r.portfolio = {{.planner = PlannerType::kPRM, .runs = 40},
+                 {.planner = PlannerType::kRRT, .runs = 40}};
+  EXPECT_EQ(field_of(r).substr(0, 12), "portfolio | ") << field_of(r);
+  r = MazeRequest();
+  r.plan_fraction = 1.5;
+  EXPECT_EQ(field_of(r).substr(0, 16), "plan_fraction | ");
+  r = MazeRequest();
+  r.merge.optimize_ms = 100;
+  EXPECT_EQ(field_of(r).substr(0, 20), "merge.optimize_ms | ");
+  r = MazeRequest();
+  r.start = Eigen::Vector2d(0.1, 0.1);  // inside the outer wall
+  EXPECT_NE(field_of(r).find("start | start: is in collision"), std::string::npos) << field_of(r);
+  r = MazeRequest();
+  r.goal = Eigen::Vector3d(1, 1, 1);
+  EXPECT_EQ(field_of(r).substr(0, 7), "goal | ");
+}
+
+// No path exists between two rooms: the budget ends with a result that says so, not an error.
+TEST(SolveNoPathTest, ABudgetWithoutAPathEndsWithAResultThatSaysSo) {
+  auto scene = std::make_shared<Scene>(Scene{
+      .name = "two-rooms",
+      .space = Space::RealVector(Eigen::Vector2d(0, 0), Eigen::Vector2d(10, 10)),
+  });
+  Obstacle wall{.name = "wall",
+                .shape = Shape{.type = ShapeType::kBox, .box_size = Eigen::Vector3d(0.5, 20, 1)}};
+  wall.pose.translation() = Eigen::Vector3d(5, 5, 0);
+  scene->obstacles.push_back(wall);
+  scene->robot.push_back(
+      RobotBody{.name = "point", .shape = Shape{.type = ShapeType::kSphere, .radius = 0.1}});
+  const LocalPlanner planner(std::make_shared<const CollisionWorld>(scene));
+  int updates = 0;
+  const SolveResult result =
+      Solve(planner, {.start = Eigen::Vector2d(2, 5),
+                      .goal = Eigen::Vector2d(8, 5),
+                      .budget_s = 0.3,
+                      .portfolio = {{.planner = PlannerType::kRRTConnect, .runs = 2},
+                                    {.planner = PlannerType::kBITStar, .runs = 1}},
+                      .on_update = [&](const SolveUpdate&) { ++updates; }});
+  EXPECT_FALSE(result.found);
+  EXPECT_EQ(result.session, nullptr);
+  EXPECT_EQ(updates, 0);
+  EXPECT_NE(result.message.find("no path found in 0.3 s"), std::string::npos) << result.message;
+  EXPECT_EQ(result.runs.size(), 3u);
+  for (const SolveRun& run : result.runs) EXPECT_FALSE(run.found);
+}
+
+// A cancel stops every planner (a 30 s budget of optimizing planners) and the call.
+TEST_F(SolveTest, CancelStopsEveryPlanner) {
+  SolveRequest request = MazeRequest();
+  request.budget_s = 30;
+  request.portfolio = {{.planner = PlannerType::kBITStar, .runs = 2},
+                       {.planner = PlannerType::kRRTStar, .runs = 2}};
+  request.parallel = 4;
+  auto solving = std::async(std::launch::async, [&] { return Solve(*maze_->planner, request); });
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  request.cancel.Cancel();
+  try {
+    solving.get();
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kCancelled);
+  }
+}
+
+}  // namespace
+}  // namespace hgraph
