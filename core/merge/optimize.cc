@@ -188,7 +188,7 @@ ShortcutResult PostOptimizer::Shorten(const std::vector<int>& ids,
                           },
                           .until = budget_end_};
   for (int n : ids) request.path.waypoints.push_back(graph_.node(n).q);
-  ShortcutResult shortcut = ShortcutCertified(*session_.checker_, request, cancel_);
+  ShortcutResult shortcut = ShortcutCertified(*session_.checker_, request, round_cancel_);
   *rechecked_ += shortcut.edges_checked;
   ++result_->stats.optimize_rounds;
   for (const auto& [a, b, report] : shortcut.id_checks) Keep(a, b, report);

@@ -20,12 +20,13 @@ namespace {
 // ratios to OMPL of 0.9446 against 0.9443. With `lazy` (ShortcutRequest::lazy, or sampled), at
 // the samples only.
 EdgeReport Check(const MotionChecker& checker, const Config& a, const Config& b, double safety,
-                 bool lazy) {
+                 bool lazy, const CancelToken& cancel) {
   return checker.CheckEdge(EdgeCheckRequest{.from = &a,
                                             .to = &b,
                                             .proof = safety > 0 ? EdgeProof::kProfile
                                                      : lazy     ? EdgeProof::kSamples
-                                                                : EdgeProof::kCertificateOrGiveUp});
+                                                                : EdgeProof::kCertificateOrGiveUp,
+                                            .cancel = &cancel});
 }
 
 // Whether a path may take the motion: proven free (and keeping `safety`), or with `lazy` valid at
@@ -121,7 +122,7 @@ class Shortening {
   // Whether CheckMotion gives up where a certificate stalls (EdgeProof::kCertificateOrGiveUp).
   bool GivesUp() const { return request_.safety <= 0 && !lazy_ && !request_.sampled; }
   EdgeReport CheckMotion(const Config& a, const Config& b) const {
-    return Check(checker_, a, b, request_.safety, lazy_ || request_.sampled);
+    return Check(checker_, a, b, request_.safety, lazy_ || request_.sampled, cancel_);
   }
   bool MayTake(const EdgeReport& report) const {
     return hgraph::MayTake(report, request_.safety, lazy_, request_.sampled);
@@ -551,9 +552,18 @@ WaypointSource SourceBetween(const WaypointSource& a, const WaypointSource& b, d
 ShortcutResult ShortcutCertified(const MotionChecker& checker, const ShortcutRequest& request,
                                  const CancelToken& cancel) {
   Shortening shortening(checker, request, cancel);
-  shortening.DropWaypoints();
-  shortening.TryRandomPairs();
-  if (request.corners_only) shortening.CutCorners();
+  try {
+    shortening.DropWaypoints();
+    shortening.TryRandomPairs();
+    if (request.corners_only) shortening.CutCorners();
+  } catch (const Error& e) {
+    // A token whose deadline is the request's `until` stopped a check in flight: the
+    // shortcuts taken before it stand (a pass changes the path only once its checks are done).
+    if (e.code() != ErrorCode::kDeadlineExceeded || !request.until ||
+        std::chrono::steady_clock::now() < *request.until) {
+      throw;
+    }
+  }
   return shortening.Finish();
 }
 

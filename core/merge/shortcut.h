@@ -70,7 +70,8 @@ struct ShortcutRequest {
   // valid and certified (lazy, sampled: valid), is taken instead of a check. May be empty.
   std::function<const EdgeReport*(int a, int b)> known;
   // A budget's end: no pass of waypoint drops, batch of random pairs or corner cut starts after
-  // it, and the result holds what was taken before (unlike a stopped token, which throws).
+  // it, and the result holds what was taken before. A token whose deadline passes at `until` too
+  // stops the checks in flight, with the same result; any other stop throws.
   std::optional<std::chrono::steady_clock::time_point> until;
 };
 

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <memory>
 #include <string>
 #include <vector>
@@ -14,6 +15,8 @@
 #include "core/adapter/path_io.h"
 #include "core/adapter/scene_proto.h"
 #include "core/collision/collision_world.h"
+#include "core/common/error.h"
+#include "core/common/progress.h"
 #include "core/merge/path_check.h"
 #include "core/motion/local_planner.h"
 #include "tests/unit/test_scenes.h"
@@ -89,6 +92,26 @@ TEST_F(ShortcutTest, ShortensKeepsTheEndpointsAndEveryEdgeIsCertified) {
     }
   }
   ExpectCertified(r.path);
+}
+
+// A budget's end (ShortcutRequest::until) with a token whose deadline is the same end: where it
+// has passed, the shortening returns the path as it came, every edge its own, without throwing;
+// the token's deadline without `until` (the caller's own stop) throws.
+TEST_F(ShortcutTest, ABudgetsEndReturnsWhatWasTakenAndAStopThrows) {
+  const auto passed = std::chrono::steady_clock::now() - std::chrono::milliseconds(1);
+  const CancelToken budget = CancelToken().WithDeadline(passed);
+  ShortcutRequest request = Request();
+  request.until = passed;
+  const ShortcutResult r = ShortcutCertified(planner_, request, budget);
+  EXPECT_EQ(r.accepted, 0);
+  EXPECT_EQ(r.path.waypoints, path_.waypoints);
+  EXPECT_EQ(r.edges.size() + 1, path_.waypoints.size());
+  try {
+    ShortcutCertified(planner_, Request(), budget);
+    ADD_FAILURE() << "a passed deadline without `until` did not throw";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kDeadlineExceeded);
+  }
 }
 
 // Lazy shortcuts (ShortcutRequest::lazy) take motions valid at their samples: no distance query
