@@ -95,7 +95,10 @@ class PathMergerService::SolveCall final : public grpc::ServerWriteReactor<v1::S
       runs += std::max(1, entry.runs());
     }
     if (solve.portfolio.empty()) {
-      for (const PortfolioEntry& e : DefaultPortfolio()) runs += e.runs;
+      for (const PortfolioEntry& e :
+           DefaultPortfolio(solve.parallel > 0 ? solve.parallel : threads)) {
+        runs += e.runs;
+      }
     }
     CheckPathCount(runs, "portfolio", "planner runs (one path each)", service_->options());
     if (request.has_start()) {
