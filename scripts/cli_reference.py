@@ -15,7 +15,7 @@ import sys
 
 BEGIN = "<!-- BEGIN CLI REFERENCE (scripts/cli_reference.py --write) -->"
 END = "<!-- END CLI REFERENCE -->"
-SUBCOMMANDS = ["merge", "check", "plan", "render", "view", "import-cfg", "requery", "add-paths"]
+SUBCOMMANDS = ["merge", "check", "plan", "solve", "render", "view", "import-cfg", "requery", "add-paths"]
 
 
 def help_text(*cmd):

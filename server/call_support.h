@@ -99,6 +99,11 @@ class PathMergerService::CallBase {
   // it while it reads). False after completing the call with Busy().
   bool Hold();
   void SubmitHeld(std::function<void()> body);
+  // Stores an H-Graph that a merge (or a Solve) under the reserved `name` built, for re-queries,
+  // and names it in `out` (hgraph, generation, retention), which becomes stored->answer (what
+  // GetHGraph and a repeat of the merge answer).
+  void Keep(const std::string& session, const std::string& name,
+            std::shared_ptr<StoredHGraph> stored, v1::MergePathsResponse* out);
   // Runs `body` here, on the gRPC thread (lookups only), and completes the call with its status.
   void RunHere(const std::function<void()>& body);
   // The status to finish with: counted and logged the first time (later calls only pass it

@@ -208,59 +208,6 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
     Keep(session.name(), name, std::move(stored), out);
   }
 
-  // Stores the H-Graph for re-queries and names it in `out`. A session deleted (or expired)
-  // while the merge ran gets no H-Graph, but the client still gets its result.
-  void Keep(const std::string& session, const std::string& name,
-            std::shared_ptr<StoredHGraph> stored, v1::MergePathsResponse* out) {
-    // What a repeat of the request answers.
-    out->set_hgraph(name);
-    out->set_generation(stored->generation);
-    out->set_retention(v1::RETENTION_KEPT);
-    out->set_shared(service_->shared_ != nullptr);
-    stored->answer = *out;
-    // In the shared store before the answer goes out (and before any other call can reach it
-    // here): a client told of an H-Graph can re-query it on any replica.
-    bool written = false;
-    if (service_->shared_) {
-      written = service_->SaveHGraph(name, *stored, /*cas=*/false) == SharedState::Write::kStored;
-      if (!written) {
-        out->set_shared(false);
-        stored->answer.set_shared(false);
-      }
-    }
-    // The name stays empty for readers older than `retention`, which says why.
-    const auto not_kept = [this, out, written, &name](v1::Retention why) {
-      if (written) service_->shared_->DeleteHGraph(name);
-      out->clear_hgraph();
-      out->clear_generation();
-      out->clear_shared();
-      out->set_retention(why);
-    };
-    // In the cache before the registry says kept: a GetHGraph in between sees the merge still
-    // running, never a kept name with nothing behind it.
-    const size_t bytes = stored->session->memory_bytes();
-    if (!service_->cache_.Put(CacheKind::kHGraph, name, std::move(stored), bytes)) {
-      // Larger than the whole budget: the result stands, but there is nothing to re-query.
-      service_->sessions_.AbandonHGraph(name);
-      spdlog::warn("MergePaths session={} H-Graph of {} bytes exceeds --cache-bytes; not kept",
-                   session, bytes);
-      return not_kept(v1::RETENTION_TOO_LARGE);
-    }
-    try {
-      service_->sessions_.KeepHGraph(name);
-      // Re-created since by another tenant: not this call's session any more.
-      service_->sessions_.Touch(session, "session", tenant_);
-    } catch (const Error& e) {
-      if (e.code() != ErrorCode::kNotFound && e.code() != ErrorCode::kPermissionDenied) throw;
-      // Deleted (or expired) while the merge ran: DeleteSession could not drop what was not yet
-      // kept, so this call does.
-      spdlog::info("MergePaths session={} was deleted while the merge ran; H-Graph not kept",
-                   session);
-      service_->cache_.Erase(CacheKind::kHGraph, name);
-      return not_kept(v1::RETENTION_SESSION_ENDED);
-    }
-  }
-
   // Called from engine worker threads.
   void OnProgress(const Progress& progress) {
     const Clock::time_point now = Clock::now();

@@ -82,11 +82,14 @@ class PathMergerService::PlanCall final : public grpc::ServerWriteReactor<v1::Pl
       throw InputError("goal", "must be set: the scene has no goal of its own");
     }
     plan.cancel = token_;
+    plan.keep_uncertified = request.keep_uncertified();
+    if (request.sampled_motions()) plan.motion_check = OmplMotionCheck::kDiscrete;
     plan.on_path = [this](const PlanAttempt& attempt, const InputPath& path) {
       v1::PlanPathsResponse event;
       *event.mutable_path() = PathToProto(path);
       event.set_index(attempt.index);
       event.set_elapsed_ms(attempt.elapsed_ms);
+      if (!attempt.certified) event.set_uncertified_edge(attempt.invalid_edge);
       Send(std::move(event));
     };
     if (request.report_failures()) {

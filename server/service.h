@@ -87,6 +87,8 @@ class PathMergerService final : public v1::PathMerger::CallbackService {
                                      v1::AddPathsResponse* response) override;
   grpc::ServerWriteReactor<v1::PlanPathsResponse>* PlanPaths(
       grpc::CallbackServerContext* context, const v1::PlanPathsRequest* request) override;
+  grpc::ServerWriteReactor<v1::SolveResponse>* Solve(grpc::CallbackServerContext* context,
+                                                     const v1::SolveRequest* request) override;
   grpc::ServerUnaryReactor* CheckPaths(grpc::CallbackServerContext* context,
                                        const v1::CheckPathsRequest* request,
                                        v1::CheckPathsResponse* response) override;
@@ -128,6 +130,7 @@ class PathMergerService final : public v1::PathMerger::CallbackService {
   class UploadCall;
   class MergeCall;
   class PlanCall;
+  class SolveCall;
 
   // Counts the call as started (grpc_server_started_total) and returns its start time.
   std::chrono::steady_clock::time_point RecordStart(const std::string& method);

@@ -72,6 +72,7 @@ struct Subcommand {
 Subcommand AddMergeCommand(CLI::App& parent);
 Subcommand AddCheckCommand(CLI::App& parent);
 Subcommand AddPlanCommand(CLI::App& parent);
+Subcommand AddSolveCommand(CLI::App& parent);
 Subcommand AddRenderCommand(CLI::App& parent);
 Subcommand AddViewCommand(CLI::App& parent);
 Subcommand AddImportCfgCommand(CLI::App& parent);

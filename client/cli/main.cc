@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
       WithServer(AddMergeCommand(app)),
       WithServer(AddCheckCommand(app)),
       WithServer(AddPlanCommand(app)),
+      WithServer(AddSolveCommand(app)),
       WithServer(AddRenderCommand(app)),
       WithServer(AddViewCommand(app)),
       WithServer(AddImportCfgCommand(app)),

@@ -200,7 +200,9 @@ Subcommand AddPlanCommand(CLI::App& parent) {
       "Write the paths here (.json: PathSet; .path: OMPL's PathGeometric printout; otherwise "
       "OMPL text)");
   app->add_option("--planner", f.planner,
-                  "prm (no cycles, as the paper), prm-cycles, prmstar, rrt, rrtconnect, lazyprm")
+                  "prm (no cycles, as the paper), prm-cycles, prmstar, rrt, rrtconnect, lazyprm; "
+                  "the asymptotically optimal rrtstar, informed-rrtstar, bitstar, aitstar (each "
+                  "spends its whole --time and returns its best path)")
       ->capture_default_str();
   app->add_option("--count", f.count, "Number of paths (one planner run each)")
       ->capture_default_str();

@@ -262,6 +262,26 @@ void RemoteClient::Plan(const v1::PlanPathsRequest& request,
   Check(reader->Finish(), "PlanPaths");
 }
 
+v1::SolveResponse RemoteClient::Solve(
+    const v1::SolveRequest& request,
+    const std::function<void(const v1::SolveProgress&)>& on_progress) {
+  grpc::ClientContext context;
+  Prepare(&context);
+  auto reader = stub_->Solve(&context, request);
+  v1::SolveResponse event;
+  v1::SolveResponse result;
+  while (reader->Read(&event)) {
+    if (event.has_result()) {
+      result = std::move(event);
+      event.Clear();
+    } else {
+      on_progress(event.progress());
+    }
+  }
+  Check(reader->Finish(), "Solve");
+  return result;
+}
+
 // The same table as the in-process merge, from the proto result.
 void PrintRemoteResult(const v1::MergeResult& r, const std::string& hgraph) {
   PrintMergeTable(MergeResultFromProto(r));

@@ -65,6 +65,9 @@ class RemoteClient {
   // Calls on_path for each path as it arrives.
   void Plan(const v1::PlanPathsRequest& request,
             const std::function<void(const v1::PlanPathsResponse&)>& on_path);
+  // Streams a Solve; on_progress sees every progress event; returns the result event.
+  v1::SolveResponse Solve(const v1::SolveRequest& request,
+                          const std::function<void(const v1::SolveProgress&)>& on_progress);
 
  private:
   void Prepare(grpc::ClientContext* context) const;

@@ -194,9 +194,12 @@ AttemptProblem MakeAttemptProblem(const MotionChecker& checker, const PlanReques
 // records its time and OMPL's status in `attempt`.
 void Solve(const AttemptProblem& problem, const PlanRequest& request, PlanAttempt* attempt) {
   const CancelToken cancel = request.cancel;
-  const ob::PlannerTerminationCondition ptc = ob::plannerOrTerminationCondition(
-      ob::timedPlannerTerminationCondition(request.time_s),
-      ob::PlannerTerminationCondition([cancel] { return cancel.stopped(); }));
+  const CancelToken finish = request.finish;
+  const ob::PlannerTerminationCondition ptc =
+      ob::plannerOrTerminationCondition(ob::timedPlannerTerminationCondition(request.time_s),
+                                        ob::PlannerTerminationCondition([cancel, finish] {
+                                          return cancel.stopped() || finish.stopped();
+                                        }));
   const auto t0 = std::chrono::steady_clock::now();
   const ob::PlannerStatus status = problem.planner->solve(ptc);
   attempt->elapsed_ms =

@@ -106,6 +106,9 @@ struct PlanRequest {
   PathCallback on_path;        // may be empty
   FailureCallback on_failure;  // may be empty
   CancelToken cancel;  // stops the current run and throws Error(kCancelled/kDeadlineExceeded)
+  // Ends the current run as its time would (its best path so far is returned, not an error), and
+  // every later attempt at once: a caller that has what it needs stops an optimizing planner.
+  CancelToken finish;
 };
 
 // What happened to one requested path.

@@ -71,9 +71,15 @@ std::vector<PlannerType> RunOrder(const std::vector<PortfolioEntry>& portfolio) 
 // The planner runs, shared by the planner threads and the merging thread. Thread safe.
 class RunBoard {
  public:
+  // Runs end by plan_end once a path is known, and by `last` (the budget's end, less the
+  // merge's margin) while none is.
   RunBoard(std::vector<PlannerType> order, int parallel, Clock::time_point started,
-           Clock::time_point plan_end)
-      : order_(std::move(order)), parallel_(parallel), started_(started), plan_end_(plan_end) {
+           Clock::time_point plan_end, Clock::time_point last)
+      : order_(std::move(order)),
+        parallel_(parallel),
+        started_(started),
+        plan_end_(plan_end),
+        last_(last) {
     for (PlannerType type : order_) optimizing_left_ += IsOptimizingPlanner(type) ? 1 : 0;
   }
 
@@ -82,7 +88,7 @@ class RunBoard {
     std::lock_guard lock(mutex_);
     if (stopped_ || next_ >= static_cast<int>(order_.size())) return false;
     const Clock::time_point now = Clock::now();
-    const double left_s = std::chrono::duration<double>(plan_end_ - now).count();
+    const double left_s = std::chrono::duration<double>((found_ ? plan_end_ : last_) - now).count();
     if (left_s < kMinRunS) return false;
     *index = next_++;
     *planner = order_[*index];
@@ -102,6 +108,7 @@ class RunBoard {
   void Finish(SolveRun run, InputPath path) {
     {
       std::lock_guard lock(mutex_);
+      found_ = found_ || !path.waypoints.empty();
       ended_.push_back({std::move(run), std::move(path)});
     }
     changed_.notify_all();
@@ -142,7 +149,9 @@ class RunBoard {
   const int parallel_;
   const Clock::time_point started_;
   const Clock::time_point plan_end_;
+  const Clock::time_point last_;
   mutable std::mutex mutex_;
+  bool found_ = false;  // a run has found a path
   std::condition_variable changed_;
   int next_ = 0;
   int optimizing_left_ = 0;
@@ -153,12 +162,13 @@ class RunBoard {
 
 // One planner thread: starts runs until the board has none left.
 void PlanRuns(const MotionChecker& checker, const SolveRequest& request, RunBoard* board,
-              const CancelToken& stop) {
+              const CancelToken& stop, const CancelToken& finish) {
   int index = 0;
   PlannerType planner = PlannerType::kPRM;
   double time_s = 0;
   double start_ms = 0;
-  while (!stop.stopped() && board->Next(&index, &planner, &time_s, &start_ms)) {
+  while (!stop.stopped() && !finish.stopped() &&
+         board->Next(&index, &planner, &time_s, &start_ms)) {
     SolveRun run{.planner = planner, .index = index, .time_s = time_s, .start_ms = start_ms};
     InputPath path;
     try {
@@ -171,7 +181,8 @@ void PlanRuns(const MotionChecker& checker, const SolveRequest& request, RunBoar
                                          .seed = PlanAttemptSeed(request.seed, index),
                                          .resolution = request.resolution,
                                          .keep_uncertified = true,
-                                         .cancel = stop});
+                                         .cancel = stop,
+                                         .finish = finish});
       const PlanAttempt& attempt = planned.attempts.at(0);
       run.seed = attempt.seed;
       run.elapsed_ms = attempt.elapsed_ms;
@@ -195,10 +206,11 @@ void PlanRuns(const MotionChecker& checker, const SolveRequest& request, RunBoar
 
 }  // namespace
 
-std::vector<PortfolioEntry> DefaultPortfolio() {
-  return {{.planner = PlannerType::kPRM, .runs = 4},
-          {.planner = PlannerType::kBITStar, .runs = 2},
-          {.planner = PlannerType::kRRTStar, .runs = 1}};
+std::vector<PortfolioEntry> DefaultPortfolio(int parallel) {
+  const int bitstar = std::max(1, (parallel + 1) / 2);
+  const int rrtstar = std::max(1, parallel / 2);
+  return {{.planner = PlannerType::kBITStar, .runs = bitstar},
+          {.planner = PlannerType::kRRTStar, .runs = rrtstar}};
 }
 
 SolveRequest ResolveSolveRequest(const MotionChecker& checker, const SolveRequest& request) {
@@ -209,7 +221,17 @@ SolveRequest ResolveSolveRequest(const MotionChecker& checker, const SolveReques
                                      Seconds(kMaxSolveBudgetS) + "], got " +
                                      std::to_string(request.budget_s));
   }
-  if (out.portfolio.empty()) out.portfolio = DefaultPortfolio();
+  if (out.parallel < 0 || out.parallel > kMaxSolveRuns) {
+    throw InputError("parallel", "must be in [0, " + std::to_string(kMaxSolveRuns) +
+                                     "] (0 = the merge's threads), got " +
+                                     std::to_string(out.parallel));
+  }
+  if (out.parallel == 0) {
+    out.parallel = out.merge.threads > 0
+                       ? out.merge.threads
+                       : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  }
+  if (out.portfolio.empty()) out.portfolio = DefaultPortfolio(out.parallel);
   int runs = 0;
   for (size_t i = 0; i < out.portfolio.size(); ++i) {
     const int n = out.portfolio[i].runs;
@@ -229,16 +251,6 @@ SolveRequest ResolveSolveRequest(const MotionChecker& checker, const SolveReques
   } else if (!(out.plan_fraction > 0 && out.plan_fraction <= 1)) {
     throw InputError("plan_fraction",
                      "must be in (0, 1], got " + std::to_string(request.plan_fraction));
-  }
-  if (out.parallel < 0 || out.parallel > kMaxSolveRuns) {
-    throw InputError("parallel", "must be in [0, " + std::to_string(kMaxSolveRuns) +
-                                     "] (0 = the merge's threads), got " +
-                                     std::to_string(out.parallel));
-  }
-  if (out.parallel == 0) {
-    out.parallel = out.merge.threads > 0
-                       ? out.merge.threads
-                       : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   }
   out.parallel = std::min(out.parallel, runs);
   if (out.merge.optimize_ms > 0) {
@@ -271,9 +283,13 @@ SolveResult Solve(const ClearanceChecker& checker, const SolveRequest& raw) {
   // The planners stop on a cancel only (each run's own time ends it within the planning time);
   // the merge also at the hard stop past the budget. A watcher passes the caller's cancel on.
   const CancelToken planners;
+  // The planning time ends at plan_end once some run has found a path (the planners still
+  // running return their best path then), or else when the first path arrives: a budget
+  // whose planning share finds nothing keeps planning rather than merging nothing.
+  const CancelToken finish;
   const CancelToken merging;
   merging.SetDeadline(at(budget * (1 + kHardStopShare)));
-  RunBoard board(RunOrder(request.portfolio), request.parallel, started, plan_end);
+  RunBoard board(RunOrder(request.portfolio), request.parallel, started, plan_end, optimize_end);
   std::atomic<bool> finished{false};
   std::thread watcher([&] {
     while (!finished.load()) {
@@ -289,7 +305,7 @@ SolveResult Solve(const ClearanceChecker& checker, const SolveRequest& raw) {
   std::vector<std::thread> threads;
   threads.reserve(request.parallel);
   for (int t = 0; t < request.parallel; ++t) {
-    threads.emplace_back([&] { PlanRuns(checker, request, &board, planners); });
+    threads.emplace_back([&] { PlanRuns(checker, request, &board, planners, finish); });
   }
 
   SolveResult out;
@@ -344,7 +360,9 @@ SolveResult Solve(const ClearanceChecker& checker, const SolveRequest& raw) {
   try {
     while (!stopped) {
       std::vector<std::pair<SolveRun, InputPath>> ended;
-      all_done = board.Wait(end, request.parallel, &ended);
+      // Wakes at plan_end to finish the planners if a path is known by then.
+      const Clock::time_point wake = finish.stopped() || Clock::now() >= plan_end ? end : plan_end;
+      all_done = board.Wait(wake, request.parallel, &ended);
       for (auto& [run, path] : ended) {
         if (request.on_run) request.on_run(run);
         if (!path.waypoints.empty()) {
@@ -352,6 +370,10 @@ SolveResult Solve(const ClearanceChecker& checker, const SolveRequest& raw) {
           pending.push_back(std::move(path));
         }
         out.runs.push_back(std::move(run));
+      }
+      if (!out.inputs.empty() && Clock::now() >= plan_end && !finish.stopped()) {
+        finish.Cancel();
+        board.Stop();
       }
       if (all_done && out.plan_ms == 0) out.plan_ms = MsSince(started);
       if (request.cancel.stopped() || Clock::now() >= end) break;

@@ -30,10 +30,12 @@ struct PortfolioEntry {
   int runs = 1;
 };
 
-// The portfolio used when the request names none (docs/performance.md, "Solve", says how it was
-// chosen).
-std::vector<PortfolioEntry> DefaultPortfolio();
-// The default share of the budget given to planning (SolveRequest::plan_fraction).
+// The portfolio used when the request names none, for `parallel` runs at once: BIT* and RRT*,
+// one run each per thread, so that every run plans for the whole planning time
+// (docs/performance.md, "Solve", says how it was chosen).
+std::vector<PortfolioEntry> DefaultPortfolio(int parallel = 2);
+// The default share of the budget given to planning (SolveRequest::plan_fraction) once a path
+// is known; while none is, the planners go on until one is.
 inline constexpr double kDefaultPlanFraction = 0.7;
 // Limits of a request (range-checked, errors naming the field).
 inline constexpr double kMinSolveBudgetS = 0.01;
@@ -80,7 +82,8 @@ struct SolveRequest {
   // Empty: DefaultPortfolio(). At most kMaxSolveRuns runs in all.
   std::vector<PortfolioEntry> portfolio;
   // Share of the budget in which planners may run, in (0, 1]; < 0: kDefaultPlanFraction. The
-  // rest (and whatever the planners leave) goes to merging their paths.
+  // rest (and whatever the planners leave) goes to merging their paths. When no run has found a
+  // path by then, the planners go on until the first one arrives (at most to the budget's end).
   double plan_fraction = -1;
   // Planner runs at once; 0: merge.threads (all cores if that is 0).
   int parallel = 0;

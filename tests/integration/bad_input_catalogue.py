@@ -2,7 +2,7 @@
 loopback. Each case is one row (input, expected gRPC code, message fragment); after every case
 the server must still answer a health check and a valid merge, so no input may crash, hang or
 wedge it. Classes: overflowing and out-of-range numbers (scene, space, paths, merge options,
-measures, CheckPaths, PlanPaths), malformed meshes parsed out of process (truncated and lying
+measures, CheckPaths, PlanPaths, Solve), malformed meshes parsed out of process (truncated and lying
 OFF/PLY, a zip bomb, garbage), file names inside meshes (OBJ mtllib, glTF buffer uris: never
 opened), bad names, sizes and digests.
 
@@ -118,7 +118,7 @@ def digest(data):
 
 # ---------------------------------------------------------------------------------------------
 # The catalogue: (name, call, input, expected code, message fragment). `call` is one of
-# put_scene, merge, merge_options, check, plan, upload, session, requery.
+# put_scene, merge, merge_options, check, plan, solve, upload, session, requery.
 
 def wrong_size(stub):
     """The circles scene's digest as the server computes it, with size_bytes off by one."""
@@ -257,6 +257,24 @@ CASES = [
     ("hgraph_name_with_nul", "requery", "sessions/" + "0" * 32 + "/hgraphs/\x001", C.INVALID_ARGUMENT, "\\0"),
     ("scene_digest_wrong_size", "session", lambda stub: wrong_size(stub), C.INVALID_ARGUMENT, "scene.size_bytes"),
     ("plan_start_1e308", "plan", dict(start=space_pb2.Configuration(values=[1e308, 1]), goal=space_pb2.Configuration(values=[70, 70])), C.INVALID_ARGUMENT, "start"),
+    # Solve (start and goal are the circles inputs' unless a case sets them).
+    ("solve_budget_negative", "solve", dict(budget_s=-1), C.INVALID_ARGUMENT, "budget_s"),
+    ("solve_budget_1e308", "solve", dict(budget_s=1e308), C.INVALID_ARGUMENT, "budget_s"),
+    ("solve_budget_nan", "solve", dict(budget_s=float("nan")), C.INVALID_ARGUMENT, "budget_s"),
+    ("solve_planner_unknown", "solve", dict(portfolio=[service_pb2.PortfolioEntry(planner="no-such-planner")]), C.INVALID_ARGUMENT, "portfolio[0].planner"),
+    ("solve_planner_name_100kB", "solve", dict(portfolio=[service_pb2.PortfolioEntry(planner="p" * 100000)]), C.INVALID_ARGUMENT, "unknown planner"),
+    ("solve_runs_negative", "solve", dict(portfolio=[service_pb2.PortfolioEntry(planner="prm", runs=-1)]), C.INVALID_ARGUMENT, "portfolio[0].runs"),
+    ("solve_runs_2e9", "solve", dict(portfolio=[service_pb2.PortfolioEntry(planner="prm", runs=2000000000)]), C.INVALID_ARGUMENT, "portfolio[0].runs"),
+    ("solve_runs_over_max_paths", "solve", dict(portfolio=[service_pb2.PortfolioEntry(planner="prm", runs=5), service_pb2.PortfolioEntry(planner="rrt", runs=5)]), C.RESOURCE_EXHAUSTED, "portfolio"),
+    ("solve_plan_fraction_2", "solve", dict(plan_fraction=2.0), C.INVALID_ARGUMENT, "plan_fraction"),
+    ("solve_plan_fraction_nan", "solve", dict(plan_fraction=float("nan")), C.INVALID_ARGUMENT, "plan_fraction"),
+    ("solve_parallel_negative", "solve", dict(parallel=-3), C.INVALID_ARGUMENT, "parallel"),
+    ("solve_optimize_ms_set", "solve", dict(options=merge_pb2.MergeOptions(optimize_ms=100)), C.INVALID_ARGUMENT, "options.optimize_ms"),
+    ("solve_resolution_1e-12", "solve", dict(options=merge_pb2.MergeOptions(resolution=1e-12)), C.INVALID_ARGUMENT, "resolution"),
+    ("solve_start_in_collision", "solve", dict(start=space_pb2.Configuration(values=[27, 15])), C.INVALID_ARGUMENT, "start"),
+    ("solve_goal_wrong_dimension", "solve", dict(goal=space_pb2.Configuration(values=[1, 2, 3])), C.INVALID_ARGUMENT, "goal"),
+    ("solve_start_1e308", "solve", dict(start=space_pb2.Configuration(values=[1e308, 1])), C.INVALID_ARGUMENT, "start"),
+    ("solve_measure_k_1e9", "solve", dict(measure=merge_pb2.Measure(type=merge_pb2.Measure.TYPE_INVERSE_CLEARANCE, k=1e9)), C.INVALID_ARGUMENT, "measure.k"),
 ]
 
 
@@ -291,6 +309,8 @@ def set_fields(request, fields):
     for key, v in fields.items():
         if isinstance(v, (int, float, str)):
             setattr(request, key, v)
+        elif isinstance(v, list):
+            getattr(request, key).extend(v)
         else:
             getattr(request, key).CopyFrom(v)
     return request
@@ -314,6 +334,13 @@ def run(stub, session, call, value):
         request = set_fields(service_pb2.PlanPathsRequest(session=session, time_per_path_s=0.2),
                              value)
         for _ in stub.PlanPaths(request, timeout=TIMEOUT_S):
+            pass
+    elif call == "solve":
+        ends = paths().paths[0].waypoints
+        request = service_pb2.SolveRequest(session=session, budget_s=0.2)
+        request.start.CopyFrom(space_pb2.Configuration(values=ends[0].values))
+        request.goal.CopyFrom(space_pb2.Configuration(values=ends[-1].values))
+        for _ in stub.Solve(set_fields(request, value), timeout=TIMEOUT_S):
             pass
     elif call == "upload":
         declared, chunks = value

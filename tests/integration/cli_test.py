@@ -155,7 +155,7 @@ def check_path_valid(env, waypoints, name):
     expect("valid" in proc.stdout, "check printed no verdict")
 
 
-SUBCOMMANDS = ["merge", "check", "plan", "render", "import-cfg", "requery", "add-paths", "health"]
+SUBCOMMANDS = ["merge", "check", "plan", "solve", "render", "import-cfg", "requery", "add-paths", "health"]
 
 
 @case
@@ -709,6 +709,43 @@ def walled_scene(env):
     scene["obstacles"] = [{"name": "wall", "shape": {"box": {"size": [400, 2, 2]}},
                            "pose": {"position": [40, y, 0]}}]
     return env.write("walled.json", scene)
+
+
+@case
+def solve_in_process_and_through_the_server(env):
+    """`hgraph solve` on the circles scene: a certified path that `check` accepts, every run
+    listed, the H-Graph kept by the server and re-queried by name; a walled scene ends with exit 1
+    and "no path"; bad flags exit 2 naming the flag."""
+    scene = str(circles_scene(env))
+    flags = ("--budget", "1", "--planner", "prm:2", "--planner", "rrtconnect:2", "--seed", "3")
+    local = env.run("solve", "-q", "--scene", scene, *flags, "--out", "solve.json",
+                    "--out-path", "solved.json")
+    expect(local.returncode == 0, "solve failed: exit %d" % local.returncode)
+    result = json.loads((env.work / "solve.json").read_text())
+    expect(result.get("found") is True, "solve found no path: %r" % result.get("message"))
+    expect(len(result["runs"]) == 4, "expected 4 runs, got %d" % len(result["runs"]))
+    expect(re.search(r"^solved in \d+ ms", local.stdout, re.M), "no summary line")
+    proc = env.run("check", "--scene", scene, "--paths", "solved.json")
+    expect(proc.returncode == 0, "check rejected the solved path: exit %d" % proc.returncode)
+    with env.server() as server:
+        remote = env.run("solve", "-q", "--server", server.target, "--scene", scene, *flags)
+        expect(remote.returncode == 0, "solve --server failed: exit %d" % remote.returncode)
+        expect("bitstar" not in remote.stdout, "a run of a planner not asked for")
+        hgraph = re.search(r"^hgraph (sessions/[0-9a-f]+/hgraphs/\S+)", remote.stdout, re.M)
+        expect(hgraph, "solve --server names no H-Graph")
+        again = env.run("requery", "--server", server.target, "--hgraph", hgraph.group(1),
+                        "--measure", "length")
+        expect(again.returncode == 0, "requery of the solved H-Graph failed")
+        walled = env.run("solve", "-q", "--server", server.target, "--scene", walled_scene(env),
+                         "--budget", "0.3", "--planner", "rrtconnect:2")
+        expect(walled.returncode == 1, "walled scene: exit %d, expected 1" % walled.returncode)
+        expect("no path" in walled.stdout, "walled scene: no 'no path' line")
+        bad = env.run("solve", "--server", server.target, "--scene", scene, "--planner", "none")
+        env.expect_bad_input(bad, "--planner")
+    env.expect_bad_input(env.run("solve", "--scene", scene, "--budget", "0"), "--budget")
+    env.expect_bad_input(env.run("solve", "--scene", scene, "--planner", "prm:0"), "--planner")
+    env.expect_bad_input(env.run("solve", "--scene", scene, "--plan-fraction", "2"),
+                         "plan_fraction (--plan-fraction)")
 
 
 @case

@@ -701,6 +701,17 @@ def call_with(client, stub, message, field, value, kind):
         request = service_pb2.PlanPathsRequest(session=client.session)
         setattr(request, field, value)
         expected, run = field, lambda: list(stub.PlanPaths(request, timeout=3, metadata=md))
+    elif message == "SolveRequest":
+        # A short budget and one quick planner keep accepted calls short (budget_s 3600 is
+        # accepted and then cut by the call's deadline: not INVALID_ARGUMENT).
+        ends = input_paths().paths[0].waypoints
+        request = service_pb2.SolveRequest(
+            session=client.session, budget_s=0.05,
+            portfolio=[service_pb2.PortfolioEntry(planner="rrtconnect")])
+        request.start.values.extend(ends[0].values)
+        request.goal.values.extend(ends[-1].values)
+        setattr(request, field, value)
+        expected, run = field, lambda: list(stub.Solve(request, timeout=3, metadata=md))
     elif message == "ListSessionsRequest":
         request = service_pb2.ListSessionsRequest()
         setattr(request, field, value)

@@ -364,6 +364,94 @@ def test_plan_then_merge_planned_paths(client):
     assert merged.result.quality.length <= min(i.quality.length for i in merged.result.inputs)
 
 
+def test_solve_streams_improvements_and_keeps_its_hgraph(client):
+    events = []
+    solved = client.solve(1.0, portfolio={"prm": 2, "rrtconnect": 2}, seed=5,
+                          start=[30, 62], goal=[67, 35], on_progress=events.append, timeout=30)
+    assert solved.found, solved.result.message
+    assert [e for e in events] == solved.progress
+    runs = [e.run for e in events if e.HasField("run")]
+    assert sorted(r.index for r in runs) == [0, 1, 2, 3]
+    assert {r.planner for r in runs} == {"prm", "rrtconnect"}
+    assert len(solved.result.runs) == 4
+    found = [r for r in solved.result.runs if r.found]
+    # Every path found went into the H-Graph; the result is no longer than any certified input.
+    assert 1 <= len(solved.result.merge.inputs) <= len(found)
+    for r in found:
+        if r.certified:
+            assert solved.result.merge.objective <= r.length + 1e-9
+    improvements = [e.objective for e in events if e.HasField("objective")]
+    assert improvements and improvements == sorted(improvements, reverse=True)
+    assert abs(improvements[-1] - solved.result.merge.objective) < 1e-9
+    # The path is certified by the same check a merge makes.
+    assert client.check([solved.path]).valid
+    assert list(solved.path.waypoints[0].values) == [30, 62]
+    assert list(solved.path.waypoints[-1].values) == [67, 35]
+    # Kept as a merge's H-Graph: requery, add_paths and get_hgraph take its name.
+    assert solved.kept and solved.generation == 1
+    again = client.requery(solved.hgraph, measure="length")
+    assert again.quality.length <= max(r.length for r in found) + 1e-9
+    planned = client.plan(count=1, planner="rrtconnect", seed=11, start=[30, 62], goal=[67, 35])
+    grown = client.add_paths(solved.hgraph, planned)
+    assert grown.generation == 2 and len(grown.result.inputs) == len(found) + 1
+    assert len(client.get_hgraph(solved.hgraph).inputs) == len(found) + 1
+    assert list(client.get_hgraph(solved.hgraph).inputs)[:len(found)] == [
+        r.path_name for r in runs if r.found]
+
+
+def test_solve_with_no_time_for_a_planner_says_no_path_was_found(client):
+    solved = client.solve(0.01, plan_fraction=0.1, portfolio={"rrtconnect": 2},
+                          start=[30, 62], goal=[67, 35], timeout=30)
+    assert not solved.found and solved.hgraph == "" and solved.path is None
+    assert "no path found in 0.01 s" in solved.result.message
+    assert all(r.message.startswith("not started") for r in solved.result.runs)
+
+
+def test_solve_bad_input_names_the_field(client):
+    cases = [(dict(budget_s=-1), "budget_s"),
+             (dict(portfolio={"no-such-planner": 1}), "portfolio[0].planner"),
+             (dict(portfolio=[("prm", 1), ("rrt", -1)]), "portfolio[1].runs"),
+             (dict(start=[27, 15], goal=[67, 35]), "start"),
+             (dict(start=[30, 62], goal=[27, 15]), "goal"),
+             (dict(plan_fraction=1.5, start=[30, 62], goal=[67, 35]), "plan_fraction")]
+    for kwargs, field in cases:
+        kwargs.setdefault("start", [30, 62])
+        kwargs.setdefault("goal", [67, 35])
+        with pytest.raises(hgraph_client.HgraphError) as e:
+            client.solve(**{"budget_s": 0.5, "timeout": 30, **kwargs})
+        assert e.value.code == grpc.StatusCode.INVALID_ARGUMENT, (kwargs, e.value)
+        assert e.value.field == field, (kwargs, e.value.field, str(e.value))
+        assert field in str(e.value)
+
+
+def test_cancelling_a_solve_stops_its_planners(server, client):
+    before = server.metric("grpc_server_handled_total", grpc_method="Solve",
+                           grpc_code="CANCELLED")
+    request = service_pb2.SolveRequest(
+        session=client.session, budget_s=60,
+        portfolio=[service_pb2.PortfolioEntry(planner="bitstar", runs=2)])
+    request.start.values.extend([30, 62])
+    request.goal.values.extend([67, 35])
+    call = client.stub.Solve(request, timeout=120, metadata=client._metadata(client.session))
+    time.sleep(0.5)
+    call.cancel()
+    with pytest.raises(grpc.RpcError) as e:
+        for _ in call:
+            pass
+    assert e.value.code() == grpc.StatusCode.CANCELLED
+    # The planners stopped and the worker is free: the call is recorded as CANCELLED long before
+    # its 60 s budget, and a merge completes.
+    for _ in range(400):
+        if server.metric("grpc_server_handled_total", grpc_method="Solve",
+                         grpc_code="CANCELLED") > before:
+            break
+        time.sleep(0.05)
+    else:
+        raise AssertionError("the cancelled Solve was never finished")
+    merged = client.merge(input_paths(), measure="length", timeout=10)
+    assert merged.result.stats.collision_checks > 0
+
+
 def test_cancel_mid_merge_frees_the_workers(server, client):
     before = server.metric("grpc_server_handled_total", grpc_method="MergePaths",
                            grpc_code="CANCELLED")

@@ -10,6 +10,7 @@
         again = client.requery(merged.hgraph, measure="inverse-clearance")
         checked = client.check(paths)  # each path as a merge checks its inputs
         planned = client.plan(count=4)  # the paths found; planned.failures: why others were not
+        solved = client.solve(budget_s=3)  # planners and merge in one call: solved.path
 
 Install: `/usr/bin/python3 -m pip install ./client/python` (the hgraph.v1 stubs are generated
 while it builds; README.md beside pyproject.toml). In a build tree, CMake also builds them into
@@ -23,10 +24,11 @@ Every call carries the session's name in `x-hgraph-session` (session affinity be
 balancer); merge, check and plan recover from a lost replica with retries and backoff (Client).
 """
 from hgraph_client.client import (CheckOutcome, Client, HgraphError, MergeOutcome, PlanFailure,
-                                  PlanOutcome, Progress, StopMerge, connect, load_paths_text,
+                                  PlanOutcome, Progress, SolveOutcome, StopMerge, connect,
+                                  load_paths_text,
                                   make_measure, make_paths)
 from hgraph_client.status import ErrorDetails, decode as decode_error_details
 
 __all__ = ["CheckOutcome", "Client", "ErrorDetails", "HgraphError", "MergeOutcome", "PlanFailure",
-           "PlanOutcome", "Progress", "StopMerge", "connect", "decode_error_details", "load_paths_text", "make_measure",
+           "PlanOutcome", "SolveOutcome", "Progress", "StopMerge", "connect", "decode_error_details", "load_paths_text", "make_measure",
            "make_paths"]

@@ -153,6 +153,35 @@ class PlanOutcome(list):
 
 
 @dataclasses.dataclass
+class SolveOutcome:
+    # service_pb2.SolveResult: found, message (why not found), merge (the best path and its
+    # report, as a merge's result), runs (every planner run), plan_ms, elapsed_ms, budget_s.
+    result: service_pb2.SolveResult
+    # "sessions/<id>/hgraphs/<hgraph id>" of the H-Graph of every path found: pass it to
+    # requery, add_paths, get_hgraph. Empty when no path was found or it was not kept.
+    hgraph: str
+    # The progress events (service_pb2.SolveProgress): one per ended run (`run` set) and one per
+    # improvement of the best certified path (`objective` and `path` set), in arrival order.
+    progress: list
+    generation: int = 0
+    retention: int = service_pb2.RETENTION_UNSPECIFIED
+
+    @property
+    def found(self) -> bool:
+        return self.result.found
+
+    @property
+    def kept(self) -> bool:
+        """Whether the server holds the H-Graph for requery, add_paths and get_hgraph."""
+        return self.retention == service_pb2.RETENTION_KEPT
+
+    @property
+    def path(self) -> Optional[path_pb2.Path]:
+        """The best certified path, or None when none was found."""
+        return self.result.merge.path if self.result.found else None
+
+
+@dataclasses.dataclass
 class CheckOutcome:
     # One report per path, in request order: valid, invalid_edge, invalid_at, invalid_cause,
     # invalid_reason, certified, waypoints and quality (length, min/avg/inverse clearance).
@@ -710,6 +739,59 @@ class Client:
             except grpc.RpcError as e:
                 _raise(e)
             return outcome
+
+        return self._recovering(call, session)
+
+
+    def solve(self, budget_s: float = 3.0, *, portfolio=None,
+              measure: Union[str, merge_pb2.Measure] = "length", k: Optional[float] = None,
+              safety: Optional[float] = None, plan_fraction: Optional[float] = None,
+              parallel: int = 0, seed: int = 1,
+              options: Optional[merge_pb2.MergeOptions] = None,
+              session: Optional[str] = None, start: Optional[Sequence[float]] = None,
+              goal: Optional[Sequence[float]] = None,
+              on_progress: Optional[Callable[[service_pb2.SolveProgress], None]] = None,
+              timeout: Optional[float] = None) -> SolveOutcome:
+        """The best certified path within `budget_s` seconds (Solve): a portfolio of the
+        server's OMPL planners runs and each path is merged into one H-Graph as it arrives.
+
+        `portfolio`: None for the server's default, else a mapping or a list of pairs of planner
+        name and runs ({"bitstar": 2, "prm": 4}). `plan_fraction`: the share of the budget the
+        planners may use (None: the server's 0.7). A budget in which no path is found is not an
+        error: the outcome's `found` is False and result.message says why. `timeout` (the
+        call's deadline) should leave room beyond the budget (the result comes within 10% of it).
+        """
+        entries = []
+        if portfolio is not None:
+            items = portfolio.items() if hasattr(portfolio, "items") else portfolio
+            for name, runs in items:
+                entries.append(service_pb2.PortfolioEntry(planner=name, runs=runs))
+
+        def call():
+            request = service_pb2.SolveRequest(
+                session=session or self.session or "", budget_s=budget_s, portfolio=entries,
+                measure=make_measure(measure, k, safety), parallel=parallel, seed=seed)
+            if plan_fraction is not None:
+                request.plan_fraction = plan_fraction
+            if options is not None:
+                request.options.CopyFrom(options)
+            if start is not None:
+                request.start.values.extend(start)
+            if goal is not None:
+                request.goal.values.extend(goal)
+            events = []
+            try:
+                for event in self.stub.Solve(request, timeout=timeout,
+                                             metadata=self._metadata(request.session)):
+                    if event.HasField("result"):
+                        return SolveOutcome(event.result, event.hgraph, events,
+                                            event.generation, event.retention)
+                    events.append(event.progress)
+                    if on_progress is not None:
+                        on_progress(event.progress)
+            except grpc.RpcError as e:
+                _raise(e)
+            raise HgraphError(grpc.StatusCode.INTERNAL, "the stream ended without a result")
 
         return self._recovering(call, session)
 

@@ -1,0 +1,281 @@
+#include <cmath>
+#include <condition_variable>
+#include <deque>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <utility>
+
+#include "core/adapter/merge_proto.h"
+#include "core/adapter/path_io.h"
+#include "core/adapter/scene_proto.h"
+#include "core/common/limits.h"
+#include "server/call_support.h"
+#include "server/service.h"
+#ifdef HGRAPH_HAVE_SOLVE
+#include "core/solve/solve.h"
+#endif
+
+namespace hgraph::server {
+
+#ifdef HGRAPH_HAVE_SOLVE
+// Solve: runs the portfolio and the merge on a worker (the planners on threads of their own);
+// each ended run and each improvement is queued and written in order, one write in flight, then
+// the result and the status.
+class PathMergerService::SolveCall final : public grpc::ServerWriteReactor<v1::SolveResponse>,
+                                           public CallBase {
+ public:
+  SolveCall(PathMergerService* service, grpc::CallbackServerContext* context,
+            const v1::SolveRequest* request)
+      : CallBase(service, context, "Solve", request->session()), request_(request) {
+    if (!Authenticated()) return;
+    Submit([this] { Run(); });
+  }
+
+  void OnWriteDone(bool ok) override {
+    if (!ok) token_.Cancel();
+    Pump(/*write_done=*/true);
+  }
+  void OnCancel() override { token_.Cancel(); }
+  // The Finish may come from OnWriteDone's Pump while Complete's own Pump is still to run on the
+  // worker: the call is freed only once Complete has returned.
+  void OnDone() override {
+    {
+      std::unique_lock lock(mutex_);
+      completed_.wait(lock, [this] { return complete_returned_; });
+    }
+    delete this;
+  }
+
+ private:
+  static constexpr double kDefaultBudgetS = 3;
+
+  // The engine's request from the proto one, every field range-checked (errors name it).
+  SolveRequest Build(const v1::SolveRequest& request, const Scene& model, double resolution) {
+    SolveRequest solve{.measure = MeasureFromProto(request.measure()),
+                       .merge = MergeOptionsFromProto(request.options()),
+                       .budget_s = request.budget_s() == 0 ? kDefaultBudgetS : request.budget_s(),
+                       .plan_fraction = request.has_plan_fraction() ? request.plan_fraction() : -1,
+                       .parallel = request.parallel(),
+                       .seed = request.seed(),
+                       .resolution = resolution};
+    if (request.options().has_optimize_ms() && request.options().optimize_ms() != 0) {
+      throw InputError("options.optimize_ms",
+                       "must be unset (the budget sets the post-optimization's time) or 0 "
+                       "(off), got " +
+                           std::to_string(request.options().optimize_ms()));
+    }
+    if (request.options().optimize_to_deadline()) {
+      throw InputError("options.optimize_to_deadline",
+                       "is not taken by Solve: the budget sets the post-optimization's time");
+    }
+    if (request.has_plan_fraction() &&
+        !(request.plan_fraction() > 0 && request.plan_fraction() <= 1)) {
+      throw InputError("plan_fraction",
+                       "must be in (0, 1], got " + std::to_string(request.plan_fraction()));
+    }
+    if (request.parallel() < 0 || request.parallel() > kMaxSolveRuns) {
+      throw InputError("parallel", "must be in [0, " + std::to_string(kMaxSolveRuns) +
+                                       "] (0 = the server's threads), got " +
+                                       std::to_string(request.parallel()));
+    }
+    const int threads = service_->pool().threads();
+    if (solve.merge.threads <= 0 || solve.merge.threads > threads) solve.merge.threads = threads;
+    if (solve.parallel > threads) solve.parallel = threads;
+    int runs = 0;
+    for (int i = 0; i < request.portfolio_size(); ++i) {
+      const v1::PortfolioEntry& entry = request.portfolio(i);
+      const std::string field = "portfolio[" + std::to_string(i) + "]";
+      const PlannerType planner = ParsePlannerType(entry.planner(), field + ".planner");
+      if (entry.runs() < 0 || entry.runs() > kMaxSolveRuns) {
+        throw InputError(field + ".runs", "must be in [0, " + std::to_string(kMaxSolveRuns) +
+                                              "] (0 = 1), got " + std::to_string(entry.runs()));
+      }
+      solve.portfolio.push_back({.planner = planner, .runs = std::max(1, entry.runs())});
+      runs += std::max(1, entry.runs());
+    }
+    if (solve.portfolio.empty()) {
+      for (const PortfolioEntry& e :
+           DefaultPortfolio(solve.parallel > 0 ? solve.parallel : threads)) {
+        runs += e.runs;
+      }
+    }
+    CheckPathCount(runs, "portfolio", "planner runs (one path each)", service_->options());
+    if (request.has_start()) {
+      solve.start = ConfigFromProto(request.start());
+    } else if (model.start) {
+      solve.start = *model.start;
+    } else {
+      throw InputError("start", "must be set: the scene has no start of its own");
+    }
+    if (request.has_goal()) {
+      solve.goal = ConfigFromProto(request.goal());
+    } else if (model.goal) {
+      solve.goal = *model.goal;
+    } else {
+      throw InputError("goal", "must be set: the scene has no goal of its own");
+    }
+    return solve;
+  }
+
+  void Run() {
+    const v1::SolveRequest& request = *request_;
+    const v1::Session session = service_->sessions_.Touch(request.session(), "session", tenant_);
+    LoadedScene scene = service_->scenes_.Get(session.scene(), "session", token_);
+    const double resolution = ResolutionFromProto(request.options(), *scene.proto);
+    SolveRequest solve = Build(request, scene.world->scene(), resolution);
+    solve.cancel = token_;
+    solve.on_run = [this](const SolveRun& run) {
+      v1::SolveResponse event;
+      v1::SolveProgress* p = event.mutable_progress();
+      p->set_elapsed_ms(run.start_ms + run.elapsed_ms);
+      *p->mutable_run() = RunToProto(run);
+      Send(std::move(event));
+    };
+    solve.on_update = [this](const SolveUpdate& update) {
+      v1::SolveResponse event;
+      v1::SolveProgress* p = event.mutable_progress();
+      p->set_elapsed_ms(update.elapsed_ms);
+      p->set_objective(update.objective);
+      p->set_inputs(update.inputs);
+      if (update.path) *p->mutable_path() = PathToProto(*update.path);
+      Send(std::move(event));
+    };
+
+    auto stored = std::make_shared<StoredHGraph>();
+    stored->scene = scene;
+    stored->planner = std::make_unique<LocalPlanner>(
+        scene.world,
+        LocalPlannerOptions{.resolution = resolution, .clearance_bound = scene.clearance_bound});
+    SolveResult solved = ::hgraph::Solve(*stored->planner, solve);
+
+    v1::SolveResponse final_event;
+    v1::SolveResult* out = final_event.mutable_result();
+    out->set_found(solved.found);
+    out->set_message(solved.message);
+    for (const SolveRun& run : solved.runs) *out->add_runs() = RunToProto(run);
+    out->set_plan_ms(solved.plan_ms);
+    out->set_budget_s(solve.budget_s);
+    if (solved.found) {
+      *out->mutable_merge() = MergeResultToProto(solved.result);
+      EchoEvaluation(request.options(), out->mutable_merge());
+      service_->RecordMerge("Solve", out->merge());
+      // Kept as a merge's H-Graph: Requery, AddPaths and GetHGraph take its name.
+      const std::string name = service_->sessions_.ReserveHGraph(
+          session.name(), "", RequestFingerprint(request), tenant_, /*repeat=*/&repeat_);
+      stored->session = std::move(solved.session);
+      stored->measure = request.measure();
+      stored->options = request.options();
+      stored->fingerprint = RequestFingerprint(request);
+      for (const InputPath& path : solved.inputs) stored->input_names.push_back(path.name);
+      v1::MergePathsResponse answer;
+      *answer.mutable_result() = out->merge();
+      Keep(session.name(), name, std::move(stored), &answer);
+      final_event.set_hgraph(answer.hgraph());
+      final_event.set_generation(answer.generation());
+      final_event.set_retention(answer.retention());
+    }
+    out->set_elapsed_ms(MsSince(started_));
+    Send(std::move(final_event));
+  }
+
+  static v1::SolveRun RunToProto(const SolveRun& run) {
+    v1::SolveRun out;
+    out.set_planner(PlannerTypeName(run.planner));
+    out.set_index(run.index);
+    out.set_seed(run.seed);
+    out.set_time_s(run.time_s);
+    out.set_start_ms(run.start_ms);
+    out.set_elapsed_ms(run.elapsed_ms);
+    out.set_found(run.found);
+    out.set_certified(run.certified);
+    out.set_length(run.length);
+    out.set_message(run.status);
+    out.set_path_name(run.path_name);
+    return out;
+  }
+
+  // Queues one event; events go out in the order they were queued.
+  void Send(v1::SolveResponse event) {
+    {
+      std::lock_guard lock(mutex_);
+      queue_.push_back(std::move(event));
+    }
+    Pump(/*write_done=*/false);
+  }
+
+  void Complete(const grpc::Status& status) override {
+    {
+      std::lock_guard lock(mutex_);
+      status_ = Final(status);
+      done_ = true;
+      // A failed call ends with its status alone: no result follows its progress events.
+      if (!status.ok()) {
+        while (queue_.size() > (writing_ ? 1u : 0u)) queue_.pop_back();
+      }
+    }
+    Pump(/*write_done=*/false);
+    std::lock_guard lock(mutex_);
+    complete_returned_ = true;
+    completed_.notify_all();
+  }
+
+  // Starts the next write, or the Finish once the queue is drained after the work is done.
+  void Pump(bool write_done) {
+    enum { kNothing, kWrite, kFinish } action = kNothing;
+    {
+      std::lock_guard lock(mutex_);
+      if (write_done) {
+        writing_ = false;
+        queue_.pop_front();
+      }
+      if (writing_ || finished_) return;
+      if (!queue_.empty()) {
+        writing_ = true;
+        action = kWrite;
+      } else if (done_) {
+        finished_ = true;
+        action = kFinish;
+      }
+    }
+    // The front element stays put until its write is done (deque keeps references stable).
+    if (action == kWrite) StartWrite(&queue_.front());
+    if (action == kFinish) Finish(status_);
+  }
+
+  const v1::SolveRequest* request_;
+  bool repeat_ = false;  // ReserveHGraph's: never set without an hgraph_id
+  std::mutex mutex_;
+  std::deque<v1::SolveResponse> queue_;
+  bool writing_ = false;
+  bool done_ = false;
+  bool finished_ = false;
+  bool complete_returned_ = false;  // OnDone waits for it
+  std::condition_variable completed_;
+  grpc::Status status_;
+};
+
+grpc::ServerWriteReactor<v1::SolveResponse>* PathMergerService::Solve(
+    grpc::CallbackServerContext* context, const v1::SolveRequest* request) {
+  return new SolveCall(this, context, request);
+}
+#else
+grpc::ServerWriteReactor<v1::SolveResponse>* PathMergerService::Solve(
+    grpc::CallbackServerContext*, const v1::SolveRequest* request) {
+  // Finishes at once: this build has no OMPL planners.
+  class Unimplemented final : public grpc::ServerWriteReactor<v1::SolveResponse> {
+   public:
+    explicit Unimplemented(const grpc::Status& status) { Finish(status); }
+    void OnDone() override { delete this; }
+  };
+  const grpc::Status status = DetailedStatus(
+      grpc::StatusCode::UNIMPLEMENTED,
+      "Solve: this server was built without core/solve (the OMPL planners); plan paths on the "
+      "client and call MergePaths",
+      "", "UNIMPLEMENTED");
+  RecordCall("Solve", request->session(), RecordStart("Solve"), status);
+  return new Unimplemented(status);
+}
+#endif
+
+}  // namespace hgraph::server
