@@ -7,6 +7,8 @@
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
 #include <grpcpp/grpcpp.h>
 #include <grpcpp/health_check_service_interface.h>
+#include <grpcpp/impl/server_builder_option.h>
+#include <grpcpp/impl/server_builder_plugin.h>
 #include <signal.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
@@ -19,6 +21,7 @@
 #include <limits>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "core/common/error.h"
 #include "core/common/file_bytes.h"
@@ -31,15 +34,47 @@
 
 namespace {
 
+// Linking gRPC's reflection library registers its plugin with every ServerBuilder (a static
+// initializer); this option takes it out of one builder again.
+class WithoutReflection final : public grpc::ServerBuilderOption {
+ public:
+  void UpdateArguments(grpc::ChannelArguments*) override {}
+  void UpdatePlugins(std::vector<std::unique_ptr<grpc::ServerBuilderPlugin>>* plugins) override {
+    std::erase_if(*plugins, [](const std::unique_ptr<grpc::ServerBuilderPlugin>& plugin) {
+      return plugin->name() == "proto_server_reflection";
+    });
+  }
+};
+
+// What the health-only port answers to every call but grpc.health.v1's: UNIMPLEMENTED. (gRPC
+// needs some callback service beside the health service to poll the port at all.)
+class HealthOnly final : public grpc::CallbackGenericService {
+ public:
+  grpc::ServerGenericBidiReactor* CreateReactor(grpc::GenericCallbackServerContext*) override {
+    class Refused final : public grpc::ServerGenericBidiReactor {
+     public:
+      Refused() {
+        Finish(grpc::Status(grpc::StatusCode::UNIMPLEMENTED,
+                            "this port (--health-listen) serves grpc.health.v1 only"));
+      }
+      void OnDone() override { delete this; }
+    };
+    return new Refused;
+  }
+};
+
 struct Flags {
   std::string listen = "0.0.0.0:50051";
   std::string metrics_listen = "0.0.0.0:9464";
+  std::string health_listen;
   int threads = 0;
   int max_pending = 64;
   int64_t max_message_bytes = int64_t{64} << 20;
   int max_paths = 256;
   int max_waypoints = 100000;
   int max_sessions = 1000;
+  int tenant_max_sessions = 0;
+  int64_t tenant_cache_bytes = 0;
   int64_t cache_bytes = int64_t{2} << 30;
   bool clearance_bound = false;
   int64_t max_blob_bytes = int64_t{256} << 20;
@@ -73,6 +108,10 @@ int main(int argc, char** argv) {
   app.add_option("--metrics-listen", flags.metrics_listen,
                  "Prometheus /metrics address host:port (port 0 picks a free one; empty = off)")
       ->capture_default_str();
+  app.add_option("--health-listen", flags.health_listen,
+                 "a second gRPC address, plaintext, serving only grpc.health.v1 (for probes that "
+                 "cannot speak TLS, such as Kubernetes' native gRPC probes; port 0 picks a free "
+                 "one; empty = off)");
   app.add_option("--threads", flags.threads, "worker threads for all calls (0 = all cores)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
@@ -93,6 +132,15 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--max-sessions", flags.max_sessions, "live sessions")
       ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--tenant-max-sessions", flags.tenant_max_sessions,
+                 "live sessions per tenant (--auth-tokens; 0 = no quota beyond --max-sessions)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  app.add_option("--tenant-cache-bytes", flags.tenant_cache_bytes,
+                 "bytes of kept H-Graphs per tenant in the cache: past it, merges and additions "
+                 "of that tenant fail RESOURCE_EXHAUSTED (0 = no quota beyond --cache-bytes)")
+      ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   app.add_option("--cache-bytes", flags.cache_bytes,
                  "memory budget of blobs, scenes, collision worlds and H-Graphs (LRU eviction)")
@@ -210,7 +258,9 @@ int main(int argc, char** argv) {
                           static_cast<int64_t>(flags.mesh_import_timeout_s * 1e3))},
       .clearance_bound = flags.clearance_bound,
       .upload_idle_timeout =
-          std::chrono::milliseconds(static_cast<int64_t>(flags.upload_idle_timeout_s * 1e3))};
+          std::chrono::milliseconds(static_cast<int64_t>(flags.upload_idle_timeout_s * 1e3)),
+      .tenant_max_sessions = flags.tenant_max_sessions,
+      .tenant_cache_bytes = static_cast<size_t>(flags.tenant_cache_bytes)};
 
   try {
     hgraph::server::MeshImporter(options.mesh_import).CheckHelper();
@@ -268,8 +318,9 @@ int main(int argc, char** argv) {
     grpc::EnableDefaultHealthCheckService(true);
     // Reflection answers without a token: with tenants it is off unless asked for.
     const bool reflection = flags.auth_tokens.empty() || flags.reflection;
-    if (reflection) grpc::reflection::InitProtoReflectionServerBuilderPlugin();
+    grpc::reflection::InitProtoReflectionServerBuilderPlugin();
     grpc::ServerBuilder builder;
+    if (!reflection) builder.SetOption(std::make_unique<WithoutReflection>());
     int port = 0;
     builder.AddListeningPort(flags.listen, credentials, &port);
     builder.SetMaxReceiveMessageSize(static_cast<int>(flags.max_message_bytes));
@@ -283,6 +334,29 @@ int main(int argc, char** argv) {
     }
     grpc::HealthCheckServiceInterface* health = server->GetHealthCheckService();
     health->SetServingStatus("hgraph.v1.PathMerger", true);
+    // Health only, in plaintext: it says whether this process serves and nothing else, so it
+    // needs neither TLS nor a token.
+    HealthOnly health_only;  // outlives health_server
+    std::unique_ptr<grpc::Server> health_server;
+    int health_port = 0;
+    if (!flags.health_listen.empty()) {
+      grpc::ServerBuilder health_builder;
+      health_builder.SetOption(std::make_unique<WithoutReflection>());
+      health_builder.RegisterCallbackGenericService(&health_only);
+      health_builder.AddListeningPort(flags.health_listen, grpc::InsecureServerCredentials(),
+                                      &health_port);
+      health_server = health_builder.BuildAndStart();
+      if (!health_server || health_port == 0) {
+        spdlog::error("cannot listen on {} (--health-listen)", flags.health_listen);
+        server->Shutdown();
+        return 2;
+      }
+      health_server->GetHealthCheckService()->SetServingStatus("hgraph.v1.PathMerger", true);
+    }
+    const auto set_health = [&](bool serving) {
+      health->SetServingStatus(serving);
+      if (health_server) health_server->GetHealthCheckService()->SetServingStatus(serving);
+    };
 
     std::unique_ptr<hgraph::server::MetricsHttpServer> metrics_http;
     if (!flags.metrics_listen.empty()) {
@@ -290,12 +364,15 @@ int main(int argc, char** argv) {
           std::make_unique<hgraph::server::MetricsHttpServer>(metrics, flags.metrics_listen);
     }
     const int metrics_port = metrics_http ? metrics_http->port() : 0;
-    spdlog::info("serving on port {} ({}, {}) with {} worker threads; metrics on port {}", port,
-                 hgraph::server::TransportModeName(transport),
-                 options.auth.enabled() ? "bearer tokens required" : "no authentication",
-                 options.threads, metrics_port);
+    spdlog::info(
+        "serving on port {} ({}, {}) with {} worker threads; metrics on port {}; health on port "
+        "{}",
+        port, hgraph::server::TransportModeName(transport),
+        options.auth.enabled() ? "bearer tokens required" : "no authentication", options.threads,
+        metrics_port, health_port);
     // One machine-readable line on stdout for scripts and tests that start the server.
-    std::printf("hgraph-server ready grpc_port=%d metrics_port=%d\n", port, metrics_port);
+    std::printf("hgraph-server ready grpc_port=%d metrics_port=%d health_port=%d\n", port,
+                metrics_port, health_port);
     std::fflush(stdout);
 
     // The main thread waits for a signal and expires idle sessions and uploads once a second.
@@ -311,7 +388,7 @@ int main(int argc, char** argv) {
     }
     spdlog::info("received signal {}: draining for {} s, then shutting down (grace {} s)", signal,
                  flags.drain_s, flags.grace_s);
-    health->SetServingStatus(false);
+    set_health(false);
     // The drain: NOT_SERVING, but every call is still accepted and served.
     const auto drain_end = std::chrono::steady_clock::now() +
                            std::chrono::milliseconds(static_cast<int64_t>(flags.drain_s * 1e3));
@@ -335,6 +412,7 @@ int main(int argc, char** argv) {
     // merges through the cancel token.
     server->Shutdown(grace);
     server->Wait();
+    if (health_server) health_server->Shutdown();
     service.WaitIdle();
     spdlog::info("shut down cleanly");
   } catch (const hgraph::Error& e) {

@@ -134,6 +134,7 @@ class PathMergerService::MergeCall final : public grpc::ServerWriteReactor<v1::M
     const v1::MergePathsRequest& request = *request_;
     const v1::Session session = service_->TouchSession(request.session(), "session", tenant_);
     CheckBatchLimits(request.paths(), service_->options());
+    service_->CheckTenantCache(tenant_);
     if (request.paths().paths_size() == 0) throw InputError("paths.paths", "must not be empty");
     // A repeat under the same hgraph_id matches on everything but the progress rate.
     const std::string fingerprint =

@@ -162,6 +162,12 @@ size_t ResourceCache::bytes() const {
   return bytes_;
 }
 
+size_t ResourceCache::BytesOf(CacheKind kind, const std::string& key) const {
+  std::lock_guard lock(mutex_);
+  auto it = index_.find(FullKey(kind, key));
+  return it == index_.end() ? 0 : it->second->bytes;
+}
+
 size_t ResourceCache::bytes(CacheKind kind) const {
   std::lock_guard lock(mutex_);
   return kind_bytes_[static_cast<int>(kind)];

@@ -64,6 +64,8 @@ class ResourceCache {
 
   size_t bytes() const;
   size_t bytes(CacheKind kind) const;
+  // The bytes the entry counts for (0 when absent).
+  size_t BytesOf(CacheKind kind, const std::string& key) const;
   size_t budget_bytes() const { return budget_bytes_; }
   int64_t evictions(CacheKind kind) const;
 

@@ -29,7 +29,7 @@ PathMergerService::PathMergerService(const ServerOptions& options, Metrics& metr
                   : nullptr),
       scenes_(cache_, families_, MeshImporter(options.mesh_import), options.clearance_bound,
               shared_.get()),
-      sessions_(options.max_sessions, options.session_ttl),
+      sessions_(options.max_sessions, options.session_ttl, options.tenant_max_sessions),
       pool_(options.threads, options.max_admitted) {
   metrics_.AddCollector([this] {
     for (CacheKind kind :
@@ -89,6 +89,23 @@ void PathMergerService::ExpireIdleSessions() {
   const std::vector<std::string> dropped = sessions_.ExpireIdle(SessionRegistry::Clock::now());
   if (!dropped.empty()) spdlog::info("expired sessions dropped {} H-Graphs", dropped.size());
   DropHGraphs(dropped);
+}
+
+void PathMergerService::CheckTenantCache(const std::string& tenant) {
+  if (options_.tenant_cache_bytes == 0) return;
+  size_t held = 0;
+  for (const v1::Session& session : sessions_.List(tenant)) {
+    for (const std::string& hgraph : session.hgraphs()) {
+      held += cache_.BytesOf(CacheKind::kHGraph, hgraph);
+    }
+  }
+  if (held >= options_.tenant_cache_bytes) {
+    throw ServiceError(grpc::StatusCode::RESOURCE_EXHAUSTED, "TENANT_QUOTA", "",
+                       "this tenant's H-Graphs hold " + std::to_string(held) +
+                           " bytes, its quota (--tenant-cache-bytes=" +
+                           std::to_string(options_.tenant_cache_bytes) +
+                           "); delete H-Graphs or sessions it no longer needs");
+  }
 }
 
 v1::Session PathMergerService::TouchSession(const std::string& name, const std::string& field,

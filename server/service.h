@@ -47,6 +47,9 @@ struct ServerOptions {
   Authenticator auth;  // --auth-tokens: who a call comes from (open without it)
   // An UploadBlob stream that sends nothing for this long is aborted (ExpireIdleUploads).
   std::chrono::milliseconds upload_idle_timeout{std::chrono::seconds(30)};
+  // Per-tenant quotas (0 = none): live sessions, and bytes of kept H-Graphs in the cache.
+  int tenant_max_sessions = 0;
+  size_t tenant_cache_bytes = 0;
   // --store: what the replicas share (server/shared_state.h); null shares nothing (memory).
   std::shared_ptr<Store> store;
 };
@@ -142,6 +145,9 @@ class PathMergerService final : public v1::PathMerger::CallbackService {
   // replica has changed since is loaded again.
   std::shared_ptr<StoredHGraph> HeldHGraph(const std::string& name, const std::string& tenant,
                                            const std::string& field = "hgraph");
+  // Throws ServiceError RESOURCE_EXHAUSTED TENANT_QUOTA when the tenant's kept H-Graphs hold
+  // --tenant-cache-bytes or more (before a merge or an addition grows them).
+  void CheckTenantCache(const std::string& tenant);
   // SessionRegistry::Touch, except that with a shared store a session this replica does not
   // hold is read from it (and adopted) before NOT_FOUND.
   v1::Session TouchSession(const std::string& name, const std::string& field,

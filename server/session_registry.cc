@@ -37,8 +37,9 @@ ServiceError SessionNotFound(const std::string& field, const std::string& messag
 
 }  // namespace
 
-SessionRegistry::SessionRegistry(int max_sessions, std::chrono::milliseconds ttl)
-    : max_sessions_(max_sessions), ttl_(ttl) {}
+SessionRegistry::SessionRegistry(int max_sessions, std::chrono::milliseconds ttl,
+                                 int tenant_max_sessions)
+    : max_sessions_(max_sessions), tenant_max_sessions_(tenant_max_sessions), ttl_(ttl) {}
 
 void SessionRegistry::ValidateName(const std::string& name, const std::string& field) {
   if (name.rfind(kPrefix, 0) != 0 || name.size() != kPrefix.size() + 32) {
@@ -106,6 +107,19 @@ v1::Session SessionRegistry::Create(const v1::Digest& scene, const std::string& 
                 std::to_string(sessions_.size()) +
                     " sessions exist, the limit (--max-sessions); "
                     "delete one or let idle ones expire");
+  }
+  if (tenant_max_sessions_ > 0) {
+    const Clock::time_point now = Clock::now();
+    const auto held = std::count_if(sessions_.begin(), sessions_.end(), [&](const auto& s) {
+      return s.second.tenant == tenant && s.second.expire_time > now;
+    });
+    if (held >= tenant_max_sessions_) {
+      throw ServiceError(grpc::StatusCode::RESOURCE_EXHAUSTED, "TENANT_QUOTA", "",
+                         "this tenant has " + std::to_string(held) +
+                             " sessions, its quota (--tenant-max-sessions=" +
+                             std::to_string(tenant_max_sessions_) +
+                             "); delete one or let idle ones expire");
+    }
   }
   const Clock::time_point now = Clock::now();
   Record& record = sessions_[name];

@@ -27,7 +27,8 @@ class SessionRegistry {
  public:
   using Clock = std::chrono::system_clock;
 
-  SessionRegistry(int max_sessions, std::chrono::milliseconds ttl);
+  // `tenant_max_sessions` > 0: at most that many live sessions per tenant (--tenant-max-sessions).
+  SessionRegistry(int max_sessions, std::chrono::milliseconds ttl, int tenant_max_sessions = 0);
   SessionRegistry(const SessionRegistry&) = delete;
   SessionRegistry& operator=(const SessionRegistry&) = delete;
 
@@ -35,7 +36,8 @@ class SessionRegistry {
   // digits; InputError("session_id") otherwise), else a random id. An existing session of that
   // id on the same scene is returned as it is (a retried create), one on another scene throws
   // Error(kFailedPrecondition), one of another tenant Error(kPermissionDenied). Throws
-  // Error(kResourceExhausted) when --max-sessions sessions exist.
+  // Error(kResourceExhausted) when --max-sessions sessions exist, ServiceError
+  // RESOURCE_EXHAUSTED TENANT_QUOTA when the tenant has --tenant-max-sessions.
   v1::Session Create(const v1::Digest& scene, const std::string& id, const std::string& tenant);
   // The session, its expiry extended (every use counts as activity). Throws InputError(field)
   // for a malformed name, Error(kNotFound, field) for an unknown or expired one and
@@ -119,6 +121,7 @@ class SessionRegistry {
                          const std::string& tenant);
 
   const int max_sessions_;
+  const int tenant_max_sessions_;
   const std::chrono::milliseconds ttl_;
   mutable std::mutex mutex_;
   std::map<std::string, Record> sessions_;

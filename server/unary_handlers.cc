@@ -250,6 +250,7 @@ grpc::ServerUnaryReactor* PathMergerService::AddPaths(grpc::CallbackServerContex
           }
           const auto stored = HeldHGraph(request->hgraph(), call->tenant());
           CheckBatchLimits(request->paths(), options_);
+          CheckTenantCache(call->tenant());
           if (request->request_id().size() > 63 ||
               std::any_of(request->request_id().begin(), request->request_id().end(),
                           [](char c) { return c < '!' || c > '~'; })) {

@@ -55,11 +55,15 @@ def check_overlay(deploy, overlay):
            f"{name}: the pod labels do not match the Deployment's selector")
     container = spec["containers"][0]
     ports = {p["name"]: p["containerPort"] for p in container["ports"]}
-    expect(ports == {"grpc": 50051, "metrics": 9464}, f"{name}: server ports {ports}")
+    expect(ports == {"grpc": 50051, "metrics": 9464, "health": 50052},
+           f"{name}: server ports {ports}")
     expect("--listen=0.0.0.0:50051" in container["args"], f"{name}: --listen not on port 50051")
+    # The probes reach the plaintext health-only port, so that they work with TLS on 50051.
+    expect("--health-listen=0.0.0.0:50052" in container["args"],
+           f"{name}: --health-listen not on port 50052")
     for probe in ("readinessProbe", "livenessProbe"):
         grpc = container.get(probe, {}).get("grpc", {})
-        expect(grpc.get("port") == 50051, f"{name}: {probe} is not a gRPC probe on 50051")
+        expect(grpc.get("port") == 50052, f"{name}: {probe} is not a gRPC probe on 50052")
     for part in ("requests", "limits"):
         res = container.get("resources", {}).get(part, {})
         expect("cpu" in res and "memory" in res, f"{name}: no cpu/memory {part}")

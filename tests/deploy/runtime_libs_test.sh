@@ -40,7 +40,9 @@ for lib in "${libs[@]}"; do
 done
 mapfile -t needed < <(printf '%s\n' "${needed[@]}" | sort -u)
 for package in "${needed[@]}"; do
-  printf '%s\n' "${listed[@]}" | grep -qx "$package" ||
+  # Not `printf | grep -q`: grep's early exit may kill printf with SIGPIPE, which pipefail
+  # reports as a missing package.
+  grep -qxF -- "$package" <(printf '%s\n' "${listed[@]}") ||
     fail "$package is loaded by the binaries but missing from scripts/runtime-packages.txt"
 done
 echo "binaries need ${#needed[@]} packages: ${needed[*]}"

@@ -41,6 +41,8 @@ class ServerProcess:
             self.proc.kill()
             raise ServerDidNotStart(f"{name} did not start: {line!r} {self.proc.stderr.read()}")
         self.port, self.metrics_port = int(match.group(1)), int(match.group(2))
+        health = re.search(r"health_port=(\d+)", line)
+        self.health_port = int(health.group(1)) if health else 0  # --health-listen
         self.target = f"127.0.0.1:{self.port}"
         self.log = []
         self._reader = threading.Thread(target=lambda: self.log.extend(self.proc.stderr),

@@ -262,3 +262,67 @@ def test_bad_store_flags_fail_at_startup(tmp_path):
         assert done.returncode != 0, flags
         assert fragment in done.stderr, (flags, done.stderr)
         assert "secret" not in done.stderr
+
+
+def test_tls_store_with_a_password(tmp_path):
+    """rediss:// with a password file: a real redis-server with TLS and requirepass, its
+    certificate from a CA made by openssl now. A replica that trusts another CA, or sends a
+    wrong password, keeps serving from memory and says why in its log."""
+    def openssl(*args):
+        subprocess.run(["openssl", *args], cwd=tmp_path, check=True, capture_output=True)
+
+    openssl("req", "-x509", "-newkey", "rsa:2048", "-nodes", "-keyout", "ca.key", "-out",
+            "ca.pem", "-days", "2", "-subj", "/CN=store test CA")
+    openssl("req", "-x509", "-newkey", "rsa:2048", "-nodes", "-keyout", "rogue.key", "-out",
+            "rogue.pem", "-days", "2", "-subj", "/CN=rogue CA")
+    openssl("req", "-newkey", "rsa:2048", "-nodes", "-keyout", "redis.key", "-out", "redis.csr",
+            "-subj", "/CN=127.0.0.1")
+    (tmp_path / "ext").write_text("subjectAltName=IP:127.0.0.1\n")
+    openssl("x509", "-req", "-in", "redis.csr", "-CA", "ca.pem", "-CAkey", "ca.key",
+            "-CAcreateserial", "-out", "redis.pem", "-days", "2", "-extfile", "ext")
+    (tmp_path / "password").write_text("store-password-0123\n")
+    (tmp_path / "wrong").write_text("not-the-password\n")
+    port = free_port()
+    redis = subprocess.Popen(
+        [REDIS, "--port", "0", "--tls-port", str(port), "--bind", "127.0.0.1",
+         "--tls-cert-file", "redis.pem", "--tls-key-file", "redis.key", "--tls-ca-cert-file",
+         "ca.pem", "--tls-auth-clients", "no", "--requirepass", "store-password-0123",
+         "--save", "", "--daemonize", "no"],
+        cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    started = []
+
+    def replica(ca, password):
+        r = Replica("--store", f"rediss://127.0.0.1:{port}", "--store-ca-file", str(tmp_path / ca),
+                    "--store-password-file", str(tmp_path / password))
+        started.append(r)
+        return r
+
+    try:
+        for _ in range(200):
+            try:
+                socket.create_connection(("127.0.0.1", port), timeout=1).close()
+                break
+            except OSError:
+                time.sleep(0.02)
+        a, b = replica("ca.pem", "password"), replica("ca.pem", "password")
+        with a.client() as ca:
+            merged = merge_on(ca)
+        assert merged.shared
+        with b.client() as cb:
+            again = cb.requery(merged.hgraph, "length")
+            assert again.path == merged.result.path and again.stats.collision_checks == 0
+        for bad, why in ((("rogue.pem", "password"), "TLS handshake failed"),
+                         (("ca.pem", "wrong"), "AUTH refused")):
+            r = replica(*bad)
+            with r.client() as c:
+                assert not merge_on(c).shared
+            r.stop()
+            log = r.whole_log()
+            assert why in log, log
+            assert "store-password-0123" not in log and "not-the-password" not in log
+    finally:
+        for r in started:
+            if r.proc.poll() is None:
+                r.stop()
+        redis.terminate()
+        redis.wait(timeout=20)

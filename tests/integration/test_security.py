@@ -381,3 +381,75 @@ def test_cli_mutual_tls(pki):
         assert lone.returncode == 2 and "--tls-key" in lone.stderr, lone.stderr
     finally:
         stopped(server)
+
+
+# Probes, reflection and quotas -----------------------------------------------------------------
+
+
+def reflect(channel):
+    """ServerReflectionRequest{list_services: ""}: the services listed, or the error code."""
+    call = channel.stream_stream("/grpc.reflection.v1alpha.ServerReflection/ServerReflectionInfo")
+    try:
+        return list(call(iter([b"\x3a\x00"]), timeout=5))[0]
+    except grpc.RpcError as e:
+        return e.code()
+
+
+def test_health_listener_answers_plaintext_probes_of_a_tls_server(pki, tokens):
+    server = Server("--tls-cert", str(pki / "server.pem"), "--tls-key", str(pki / "server.key"),
+                    "--auth-tokens", str(tokens), "--health-listen", "127.0.0.1:0")
+    try:
+        assert server.health_port > 0
+        probe = f"127.0.0.1:{server.health_port}"
+        health = run_cli("health", "--server", probe)
+        assert health.returncode == 0 and "SERVING" in health.stdout, health.stdout
+        # Health only: the service itself is not there, and neither is reflection.
+        channel = grpc.insecure_channel(probe)
+        stub = service_pb2_grpc.PathMergerStub(channel)
+        with pytest.raises(grpc.RpcError) as e:
+            stub.ListSessions(service_pb2.ListSessionsRequest(), timeout=5)
+        assert e.value.code() == grpc.StatusCode.UNIMPLEMENTED
+        assert reflect(channel) == grpc.StatusCode.UNIMPLEMENTED
+        channel.close()
+        # With --auth-tokens reflection is off on the gRPC port too.
+        with grpc.secure_channel(server.target, grpc.ssl_channel_credentials(
+                (pki / "ca.pem").read_bytes())) as tls:
+            assert reflect(tls) == grpc.StatusCode.UNIMPLEMENTED
+    finally:
+        stopped(server)
+
+
+def test_reflection_with_tokens_when_asked_for(tokens):
+    server = Server("--auth-tokens", str(tokens), "--reflection")
+    try:
+        with grpc.insecure_channel(server.target) as channel:
+            assert b"hgraph.v1.PathMerger" in reflect(channel)
+    finally:
+        stopped(server)
+
+
+def test_tenant_quotas_refuse_naming_the_quota(tokens):
+    server = Server("--auth-tokens", str(tokens), "--tenant-max-sessions", "1",
+                    "--tenant-cache-bytes", "1")
+    try:
+        with hgraph_client.Client(server.target, token=TOKEN_A, retries=0) as a, \
+                hgraph_client.Client(server.target, token=TOKEN_B, retries=0) as b:
+            digest = a.upload_scene(DATA / "scene.json")
+            a.create_session(digest)
+            first = a.merge(input_paths(), optimize_ms=0)
+            assert first.kept
+            # The tenant's H-Graphs hold more than its 1-byte quota now.
+            error = expect_code(grpc.StatusCode.RESOURCE_EXHAUSTED,
+                                lambda: a.merge(input_paths(), optimize_ms=0))
+            assert error.reason == "TENANT_QUOTA" and "--tenant-cache-bytes" in error.message
+            with hgraph_client.Client(server.target, token=TOKEN_A, retries=0) as again:
+                error = expect_code(grpc.StatusCode.RESOURCE_EXHAUSTED,
+                                    lambda: again.create_session(digest))
+                assert error.reason == "TENANT_QUOTA" and "--tenant-max-sessions" in error.message
+            # Another tenant is not held to the first one's use.
+            b.create_session(b.upload_scene(DATA / "scene.json"))
+            assert b.merge(input_paths(), optimize_ms=0).kept
+            a.delete_hgraph(first.hgraph)
+            assert a.merge(input_paths(), optimize_ms=0).kept
+    finally:
+        stopped(server)
