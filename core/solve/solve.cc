@@ -207,10 +207,7 @@ void PlanRuns(const MotionChecker& checker, const SolveRequest& request, RunBoar
 }  // namespace
 
 std::vector<PortfolioEntry> DefaultPortfolio(int parallel) {
-  const int bitstar = std::max(1, (parallel + 1) / 2);
-  const int rrtstar = std::max(1, parallel / 2);
-  return {{.planner = PlannerType::kBITStar, .runs = bitstar},
-          {.planner = PlannerType::kRRTStar, .runs = rrtstar}};
+  return {{.planner = PlannerType::kPRM, .runs = std::clamp(2 * parallel, 2, kMaxSolveRuns)}};
 }
 
 SolveRequest ResolveSolveRequest(const MotionChecker& checker, const SolveRequest& request) {
