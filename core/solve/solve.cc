@@ -29,6 +29,8 @@ constexpr double kHardStopShare = 0.05;
 // budget's end, for the query's own finish (the final search, the report).
 constexpr double kMarginShare = 0.03;
 constexpr double kMinMarginS = 0.005;
+// The latest a planner may plan while no path is known (RunBoard), as a share of the budget.
+constexpr double kLastPlanShare = 0.9;
 // While planners run, each query's post-optimization gets at most this share of the budget, so
 // that the paths that arrive meanwhile wait little.
 constexpr double kInterimOptimizeShare = 0.05;
@@ -207,10 +209,7 @@ void PlanRuns(const MotionChecker& checker, const SolveRequest& request, RunBoar
 }  // namespace
 
 std::vector<PortfolioEntry> DefaultPortfolio(int parallel) {
-  const int bitstar = std::max(1, (parallel + 1) / 2);
-  const int rrtstar = std::max(1, parallel / 2);
-  return {{.planner = PlannerType::kBITStar, .runs = bitstar},
-          {.planner = PlannerType::kRRTStar, .runs = rrtstar}};
+  return {{.planner = PlannerType::kPRM, .runs = std::clamp(2 * parallel, 2, kMaxSolveRuns)}};
 }
 
 SolveRequest ResolveSolveRequest(const MotionChecker& checker, const SolveRequest& request) {
@@ -289,7 +288,11 @@ SolveResult Solve(const ClearanceChecker& checker, const SolveRequest& raw) {
   const CancelToken finish;
   const CancelToken merging;
   merging.SetDeadline(at(budget * (1 + kHardStopShare)));
-  RunBoard board(RunOrder(request.portfolio), request.parallel, started, plan_end, optimize_end);
+  // While no path is known the planners may go on to kLastPlanShare of the budget: a path that
+  // arrives then still has time to be merged and reported, and a planner slow to stop (OMPL
+  // polls its termination condition between iterations) still ends before the budget does.
+  RunBoard board(RunOrder(request.portfolio), request.parallel, started, plan_end,
+                 std::max(plan_end, at(budget * kLastPlanShare)));
   std::atomic<bool> finished{false};
   std::thread watcher([&] {
     while (!finished.load()) {

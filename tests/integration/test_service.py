@@ -20,6 +20,7 @@ import grpc
 import pytest
 
 import hgraph_client
+from google.protobuf import json_format
 from hgraph.v1 import merge_pb2, scene_pb2, service_pb2
 from server_process import ServerProcess
 
@@ -399,12 +400,19 @@ def test_solve_streams_improvements_and_keeps_its_hgraph(client):
         r.path_name for r in runs if r.found]
 
 
-def test_solve_with_no_time_for_a_planner_says_no_path_was_found(client):
-    solved = client.solve(0.01, plan_fraction=0.1, portfolio={"rrtconnect": 2},
-                          start=[30, 62], goal=[67, 35], timeout=30)
+def test_solve_without_a_path_in_its_budget_says_no_path_was_found(client):
+    # The circles scene with a wall across the whole space between start and goal.
+    scene = json_format.Parse((DATA / "scene.json").read_text(), scene_pb2.Scene())
+    wall = scene.obstacles.add(name="wall")
+    wall.shape.box.size.extend([400, 2, 2])
+    wall.pose.position.extend([40, 48.5, 0])
+    client.create_session(client.upload_scene(scene))
+    solved = client.solve(0.3, portfolio={"rrtconnect": 2}, start=[30, 62], goal=[67, 35],
+                          timeout=30)
     assert not solved.found and solved.hgraph == "" and solved.path is None
-    assert "no path found in 0.01 s" in solved.result.message
-    assert all(r.message.startswith("not started") for r in solved.result.runs)
+    assert "no path found in 0.3 s" in solved.result.message
+    assert len(solved.result.runs) == 2
+    assert not any(r.found for r in solved.result.runs)
 
 
 def test_solve_bad_input_names_the_field(client):
