@@ -153,7 +153,12 @@ void ParallelFor(int threads, size_t n, const Body& body) {
   std::unique_lock lock(loop->mutex);
   loop->closed = true;
   loop->done.wait(lock, [&] { return loop->helping == 0; });
-  if (loop->error) std::rethrow_exception(loop->error);
+  // The exception leaves the loop, which a helper may be the last to release: its last reference
+  // then drops here, in the thread that handles it, and not in a helper still unwinding its task
+  // (ThreadSanitizer cannot see libstdc++'s reference count on exceptions).
+  std::exception_ptr error = std::exchange(loop->error, nullptr);
+  lock.unlock();
+  if (error) std::rethrow_exception(std::move(error));
 }
 
 #else  // oneTBB
