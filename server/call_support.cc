@@ -8,6 +8,7 @@
 #include <string>
 #include <utility>
 
+#include "core/adapter/scene_proto.h"
 #include "core/common/client_text.h"
 #include "core/common/digest.h"
 #include "google/rpc/error_details.pb.h"
@@ -176,6 +177,13 @@ std::string RequestFingerprint(const google::protobuf::Message& request, int ign
     copy->SerializeToCodedStream(&coded);
   }
   return Sha256Hex(bytes);
+}
+
+Config EndpointOf(bool set, const v1::Configuration& given, const std::optional<Config>& scenes,
+                  const std::string& field) {
+  if (set) return ConfigFromProto(given);
+  if (scenes) return *scenes;
+  throw InputError(field, "must be set: the scene has no " + field + " of its own");
 }
 
 PathMergerService::CallBase::CallBase(PathMergerService* service,

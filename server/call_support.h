@@ -7,6 +7,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <cstdint>
 #include <deque>
 #include <functional>
@@ -21,6 +22,7 @@
 #include "core/common/progress.h"
 #include "core/merge/merge.h"
 #include "core/motion/local_planner.h"
+#include "core/space/space.h"
 #include "hgraph/v1/service.pb.h"
 #include "server/scene_store.h"
 #include "server/service.h"
@@ -122,6 +124,115 @@ class PathMergerService::CallBase {
   grpc::Status auth_;
   std::atomic<bool> recorded_{false};
 };
+
+// A server-streaming call's writes, written once: the work (on a worker, Submit) queues events
+// with Send from any thread; they go out in order, one write in flight, and Complete's status
+// follows the last. With `drop_on_error`, a call that fails ends with its status alone: the
+// events not yet written are dropped (a result must not follow a failure).
+template <typename Response>
+class PathMergerService::StreamingCall : public grpc::ServerWriteReactor<Response>,
+                                         public CallBase {
+ public:
+  StreamingCall(PathMergerService* service, grpc::CallbackServerContext* context,
+                std::string method, std::string session, bool drop_on_error)
+      : CallBase(service, context, std::move(method), std::move(session)),
+        drop_on_error_(drop_on_error) {}
+
+  void OnWriteDone(bool ok) override {
+    if (!ok) token_.Cancel();
+    Pump(/*write_done=*/true);
+  }
+  void OnCancel() override { token_.Cancel(); }
+  // The Finish may come from OnWriteDone's Pump while Complete's own Pump is still to run on the
+  // worker: the call is freed only once Complete has returned.
+  void OnDone() override {
+    {
+      std::unique_lock lock(mutex_);
+      completed_.wait(lock, [this] { return complete_returned_; });
+    }
+    delete this;
+  }
+
+ protected:
+  // Queues one event; events go out in the order they were queued.
+  void Send(Response event) {
+    {
+      std::lock_guard lock(mutex_);
+      queue_.push_back(std::move(event));
+    }
+    Pump(/*write_done=*/false);
+  }
+
+  void Complete(const grpc::Status& status) override {
+    {
+      std::lock_guard lock(mutex_);
+      status_ = Final(status);
+      done_ = true;
+      if (drop_on_error_ && !status.ok()) {
+        while (queue_.size() > (writing_ ? 1u : 0u)) queue_.pop_back();
+      }
+    }
+    Pump(/*write_done=*/false);
+    std::lock_guard lock(mutex_);
+    complete_returned_ = true;
+    completed_.notify_all();
+  }
+
+ private:
+  // Starts the next write, or the Finish once the queue is drained after the work is done.
+  void Pump(bool write_done) {
+    enum { kNothing, kWrite, kFinish } action = kNothing;
+    {
+      std::lock_guard lock(mutex_);
+      if (write_done) {
+        writing_ = false;
+        queue_.pop_front();
+      }
+      if (writing_ || finished_) return;
+      if (!queue_.empty()) {
+        writing_ = true;
+        action = kWrite;
+      } else if (done_) {
+        finished_ = true;
+        action = kFinish;
+      }
+    }
+    // The front element stays put until its write is done (deque keeps references stable).
+    if (action == kWrite) this->StartWrite(&queue_.front());
+    if (action == kFinish) this->Finish(status_);
+  }
+
+  const bool drop_on_error_;
+  std::mutex mutex_;
+  std::deque<Response> queue_;
+  bool writing_ = false;
+  bool done_ = false;
+  bool finished_ = false;
+  bool complete_returned_ = false;  // OnDone waits for it
+  std::condition_variable completed_;
+  grpc::Status status_;
+};
+
+// A server-streaming call that ends at once with `status` (recorded as `method`'s call): what a
+// build without a module answers.
+template <typename Response>
+grpc::ServerWriteReactor<Response>* FinishedStream(PathMergerService* service,
+                                                   const std::string& method,
+                                                   const std::string& session,
+                                                   const grpc::Status& status) {
+  class Finished final : public grpc::ServerWriteReactor<Response> {
+   public:
+    explicit Finished(const grpc::Status& status) { this->Finish(status); }
+    void OnDone() override { delete this; }
+  };
+  service->RecordCall(method, session, service->RecordStart(method), status);
+  return new Finished(status);
+}
+
+// A request's start or goal (`field`): the one it sets, else the scene's own; InputError naming
+// the field when neither has one.
+Config EndpointOf(bool set, const v1::Configuration& given, const std::optional<Config>& scenes,
+                  const std::string& field);
 
 // An H-Graph kept for re-queries, with the local planner its edges were checked with.
 struct PathMergerService::StoredHGraph {

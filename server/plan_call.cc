@@ -1,6 +1,3 @@
-#include <condition_variable>
-#include <deque>
-#include <mutex>
 #include <string>
 #include <utility>
 
@@ -18,29 +15,14 @@ namespace hgraph::server {
 #ifdef HGRAPH_HAVE_PLAN
 // PlanPaths: plans on a worker; each path found (and, with report_failures, each attempt that
 // found none) is queued and written in order, one write in flight, then the status.
-class PathMergerService::PlanCall final : public grpc::ServerWriteReactor<v1::PlanPathsResponse>,
-                                          public CallBase {
+class PathMergerService::PlanCall final : public StreamingCall<v1::PlanPathsResponse> {
  public:
   PlanCall(PathMergerService* service, grpc::CallbackServerContext* context,
            const v1::PlanPathsRequest* request)
-      : CallBase(service, context, "PlanPaths", request->session()), request_(request) {
+      : StreamingCall(service, context, "PlanPaths", request->session(), /*drop_on_error=*/false),
+        request_(request) {
     if (!Authenticated()) return;
     Submit([this] { Plan(); });
-  }
-
-  void OnWriteDone(bool ok) override {
-    if (!ok) token_.Cancel();
-    Pump(/*write_done=*/true);
-  }
-  void OnCancel() override { token_.Cancel(); }
-  // The Finish may come from OnWriteDone's Pump while Complete's own Pump is still to run on the
-  // worker: the call is freed only once Complete has returned.
-  void OnDone() override {
-    {
-      std::unique_lock lock(mutex_);
-      completed_.wait(lock, [this] { return complete_returned_; });
-    }
-    delete this;
   }
 
  private:
@@ -67,20 +49,8 @@ class PathMergerService::PlanCall final : public grpc::ServerWriteReactor<v1::Pl
                      .simplify = request.simplify(),
                      .resolution = request.has_resolution() ? request.resolution()
                                                             : SceneResolution(*scene.proto)};
-    if (request.has_start()) {
-      plan.start = ConfigFromProto(request.start());
-    } else if (model.start) {
-      plan.start = *model.start;
-    } else {
-      throw InputError("start", "must be set: the scene has no start of its own");
-    }
-    if (request.has_goal()) {
-      plan.goal = ConfigFromProto(request.goal());
-    } else if (model.goal) {
-      plan.goal = *model.goal;
-    } else {
-      throw InputError("goal", "must be set: the scene has no goal of its own");
-    }
+    plan.start = EndpointOf(request.has_start(), request.start(), model.start, "start");
+    plan.goal = EndpointOf(request.has_goal(), request.goal(), model.goal, "goal");
     plan.cancel = token_;
     plan.keep_uncertified = request.keep_uncertified();
     if (request.sampled_motions()) plan.motion_check = OmplMotionCheck::kDiscrete;
@@ -128,59 +98,7 @@ class PathMergerService::PlanCall final : public grpc::ServerWriteReactor<v1::Pl
     return failure;
   }
 
-  // Queues one event; events go out in the order they were queued.
-  void Send(v1::PlanPathsResponse event) {
-    {
-      std::lock_guard lock(mutex_);
-      queue_.push_back(std::move(event));
-    }
-    Pump(/*write_done=*/false);
-  }
-
-  void Complete(const grpc::Status& status) override {
-    {
-      std::lock_guard lock(mutex_);
-      status_ = Final(status);
-      done_ = true;
-    }
-    Pump(/*write_done=*/false);
-    std::lock_guard lock(mutex_);
-    complete_returned_ = true;
-    completed_.notify_all();
-  }
-
-  // Starts the next write, or the Finish once the queue is drained after the work is done.
-  void Pump(bool write_done) {
-    enum { kNothing, kWrite, kFinish } action = kNothing;
-    {
-      std::lock_guard lock(mutex_);
-      if (write_done) {
-        writing_ = false;
-        queue_.pop_front();
-      }
-      if (writing_ || finished_) return;
-      if (!queue_.empty()) {
-        writing_ = true;
-        action = kWrite;
-      } else if (done_) {
-        finished_ = true;
-        action = kFinish;
-      }
-    }
-    // The front element stays put until its write is done (deque keeps references stable).
-    if (action == kWrite) StartWrite(&queue_.front());
-    if (action == kFinish) Finish(status_);
-  }
-
   const v1::PlanPathsRequest* request_;
-  std::mutex mutex_;
-  std::deque<v1::PlanPathsResponse> queue_;
-  bool writing_ = false;
-  bool done_ = false;
-  bool finished_ = false;
-  bool complete_returned_ = false;  // OnDone waits for it
-  std::condition_variable completed_;
-  grpc::Status status_;
 };
 
 grpc::ServerWriteReactor<v1::PlanPathsResponse>* PathMergerService::PlanPaths(
@@ -191,18 +109,12 @@ grpc::ServerWriteReactor<v1::PlanPathsResponse>* PathMergerService::PlanPaths(
 grpc::ServerWriteReactor<v1::PlanPathsResponse>* PathMergerService::PlanPaths(
     grpc::CallbackServerContext*, const v1::PlanPathsRequest* request) {
   // Finishes at once: this build has no OMPL planners.
-  class Unimplemented final : public grpc::ServerWriteReactor<v1::PlanPathsResponse> {
-   public:
-    explicit Unimplemented(const grpc::Status& status) { Finish(status); }
-    void OnDone() override { delete this; }
-  };
-  const grpc::Status status = DetailedStatus(
-      grpc::StatusCode::UNIMPLEMENTED,
-      "PlanPaths: this server was built without core/plan (the OMPL input planners); generate "
-      "paths on the client",
-      "", "UNIMPLEMENTED");
-  RecordCall("PlanPaths", request->session(), RecordStart("PlanPaths"), status);
-  return new Unimplemented(status);
+  return FinishedStream<v1::PlanPathsResponse>(
+      this, "PlanPaths", request->session(),
+      DetailedStatus(grpc::StatusCode::UNIMPLEMENTED,
+                     "PlanPaths: this server was built without core/plan (the OMPL input "
+                     "planners); generate paths on the client",
+                     "", "UNIMPLEMENTED"));
 }
 #endif
 

@@ -127,6 +127,10 @@ class PathMergerService final : public v1::PathMerger::CallbackService {
 
   struct StoredHGraph;
   class CallBase;
+  template <typename Response>
+  class StreamingCall;
+  // Counts the call as started (grpc_server_started_total) and returns its start time.
+  std::chrono::steady_clock::time_point RecordStart(const std::string& method);
 
  private:
   class UnaryCall;
@@ -135,8 +139,6 @@ class PathMergerService final : public v1::PathMerger::CallbackService {
   class PlanCall;
   class SolveCall;
 
-  // Counts the call as started (grpc_server_started_total) and returns its start time.
-  std::chrono::steady_clock::time_point RecordStart(const std::string& method);
   void DropHGraphs(const std::vector<std::string>& names);
   // The stored H-Graph `name` ("sessions/<id>/hgraphs/<hgraph id>", named `field` in errors)
   // for `tenant`: its session touched (NOT_FOUND / PERMISSION_DENIED as SessionRegistry::Touch),

@@ -1,8 +1,5 @@
 #include <cmath>
-#include <condition_variable>
-#include <deque>
 #include <memory>
-#include <mutex>
 #include <string>
 #include <utility>
 
@@ -22,29 +19,15 @@ namespace hgraph::server {
 // Solve: runs the portfolio and the merge on a worker (the planners on threads of their own);
 // each ended run and each improvement is queued and written in order, one write in flight, then
 // the result and the status.
-class PathMergerService::SolveCall final : public grpc::ServerWriteReactor<v1::SolveResponse>,
-                                           public CallBase {
+class PathMergerService::SolveCall final : public StreamingCall<v1::SolveResponse> {
  public:
+  // A failed call ends with its status alone: no result follows its progress events.
   SolveCall(PathMergerService* service, grpc::CallbackServerContext* context,
             const v1::SolveRequest* request)
-      : CallBase(service, context, "Solve", request->session()), request_(request) {
+      : StreamingCall(service, context, "Solve", request->session(), /*drop_on_error=*/true),
+        request_(request) {
     if (!Authenticated()) return;
     Submit([this] { Run(); });
-  }
-
-  void OnWriteDone(bool ok) override {
-    if (!ok) token_.Cancel();
-    Pump(/*write_done=*/true);
-  }
-  void OnCancel() override { token_.Cancel(); }
-  // The Finish may come from OnWriteDone's Pump while Complete's own Pump is still to run on the
-  // worker: the call is freed only once Complete has returned.
-  void OnDone() override {
-    {
-      std::unique_lock lock(mutex_);
-      completed_.wait(lock, [this] { return complete_returned_; });
-    }
-    delete this;
   }
 
  private:
@@ -101,20 +84,8 @@ class PathMergerService::SolveCall final : public grpc::ServerWriteReactor<v1::S
       }
     }
     CheckPathCount(runs, "portfolio", "planner runs (one path each)", service_->options());
-    if (request.has_start()) {
-      solve.start = ConfigFromProto(request.start());
-    } else if (model.start) {
-      solve.start = *model.start;
-    } else {
-      throw InputError("start", "must be set: the scene has no start of its own");
-    }
-    if (request.has_goal()) {
-      solve.goal = ConfigFromProto(request.goal());
-    } else if (model.goal) {
-      solve.goal = *model.goal;
-    } else {
-      throw InputError("goal", "must be set: the scene has no goal of its own");
-    }
+    solve.start = EndpointOf(request.has_start(), request.start(), model.start, "start");
+    solve.goal = EndpointOf(request.has_goal(), request.goal(), model.goal, "goal");
     return solve;
   }
 
@@ -195,64 +166,8 @@ class PathMergerService::SolveCall final : public grpc::ServerWriteReactor<v1::S
     return out;
   }
 
-  // Queues one event; events go out in the order they were queued.
-  void Send(v1::SolveResponse event) {
-    {
-      std::lock_guard lock(mutex_);
-      queue_.push_back(std::move(event));
-    }
-    Pump(/*write_done=*/false);
-  }
-
-  void Complete(const grpc::Status& status) override {
-    {
-      std::lock_guard lock(mutex_);
-      status_ = Final(status);
-      done_ = true;
-      // A failed call ends with its status alone: no result follows its progress events.
-      if (!status.ok()) {
-        while (queue_.size() > (writing_ ? 1u : 0u)) queue_.pop_back();
-      }
-    }
-    Pump(/*write_done=*/false);
-    std::lock_guard lock(mutex_);
-    complete_returned_ = true;
-    completed_.notify_all();
-  }
-
-  // Starts the next write, or the Finish once the queue is drained after the work is done.
-  void Pump(bool write_done) {
-    enum { kNothing, kWrite, kFinish } action = kNothing;
-    {
-      std::lock_guard lock(mutex_);
-      if (write_done) {
-        writing_ = false;
-        queue_.pop_front();
-      }
-      if (writing_ || finished_) return;
-      if (!queue_.empty()) {
-        writing_ = true;
-        action = kWrite;
-      } else if (done_) {
-        finished_ = true;
-        action = kFinish;
-      }
-    }
-    // The front element stays put until its write is done (deque keeps references stable).
-    if (action == kWrite) StartWrite(&queue_.front());
-    if (action == kFinish) Finish(status_);
-  }
-
   const v1::SolveRequest* request_;
   bool repeat_ = false;  // ReserveHGraph's: never set without an hgraph_id
-  std::mutex mutex_;
-  std::deque<v1::SolveResponse> queue_;
-  bool writing_ = false;
-  bool done_ = false;
-  bool finished_ = false;
-  bool complete_returned_ = false;  // OnDone waits for it
-  std::condition_variable completed_;
-  grpc::Status status_;
 };
 
 grpc::ServerWriteReactor<v1::SolveResponse>* PathMergerService::Solve(
@@ -263,18 +178,12 @@ grpc::ServerWriteReactor<v1::SolveResponse>* PathMergerService::Solve(
 grpc::ServerWriteReactor<v1::SolveResponse>* PathMergerService::Solve(
     grpc::CallbackServerContext*, const v1::SolveRequest* request) {
   // Finishes at once: this build has no OMPL planners.
-  class Unimplemented final : public grpc::ServerWriteReactor<v1::SolveResponse> {
-   public:
-    explicit Unimplemented(const grpc::Status& status) { Finish(status); }
-    void OnDone() override { delete this; }
-  };
-  const grpc::Status status = DetailedStatus(
-      grpc::StatusCode::UNIMPLEMENTED,
-      "Solve: this server was built without core/solve (the OMPL planners); plan paths on the "
-      "client and call MergePaths",
-      "", "UNIMPLEMENTED");
-  RecordCall("Solve", request->session(), RecordStart("Solve"), status);
-  return new Unimplemented(status);
+  return FinishedStream<v1::SolveResponse>(
+      this, "Solve", request->session(),
+      DetailedStatus(grpc::StatusCode::UNIMPLEMENTED,
+                     "Solve: this server was built without core/solve (the OMPL planners); plan "
+                     "paths on the client and call MergePaths",
+                     "", "UNIMPLEMENTED"));
 }
 #endif
 
