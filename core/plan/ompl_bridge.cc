@@ -89,9 +89,13 @@ class CheckerMotion final : public ob::MotionValidator {
   // space instead of one per sample. The plain sampled check lets thin parts graze corners
   // between samples, and a path that grazes would be reported invalid by the merge it was
   // planned for.
+  // A motion whose certificate stalls falls back to a profile, which can find it free at every
+  // sample yet certify no cover of it (a state within a hair of an obstacle): such a motion is
+  // valid but not certified, and a merge would not take it, so it is refused here too.
   bool Certified(const Config& a, const Config& b) const {
-    return checker_.CheckEdge({.from = &a, .to = &b, .proof = EdgeProof::kCertificate}).state ==
-           EdgeState::kValid;
+    const EdgeReport report =
+        checker_.CheckEdge({.from = &a, .to = &b, .proof = EdgeProof::kCertificate});
+    return report.state == EdgeState::kValid && report.certified;
   }
 
   bool Count(bool valid) const {

@@ -80,14 +80,17 @@ void ValidateEndpoint(const MotionChecker& checker, const Config& q, const std::
   if (!checker.IsValid(space.Normalize(q))) throw InputError(field, "is in collision");
 }
 
-// The index of the first edge the checker rejects, or -1. With clearance asked for, the local
-// planner also certifies the stretches between its samples (and rejects touching contact), as a
-// merge does when it reports the inputs' quality: a path that passes here is valid there too.
+// The index of the first edge the checker does not certify, or -1: the stretches between its
+// samples proven free (touching contact rejected), as a merge requires of the input edges it
+// takes, so that a path that passes here is one a merge can use whole.
 int FirstInvalidEdge(const MotionChecker& checker, const InputPath& path) {
   for (size_t k = 0; k + 1 < path.waypoints.size(); ++k) {
-    const EdgeReport report = checker.CheckEdge(
-        {.from = &path.waypoints[k], .to = &path.waypoints[k + 1], .proof = EdgeProof::kProfile});
-    if (report.state != EdgeState::kValid) return static_cast<int>(k);
+    // Valid and certified, as a merge takes its inputs' edges (a profile may find a motion free
+    // at every sample and still certify no cover of it).
+    const EdgeReport report = checker.CheckEdge({.from = &path.waypoints[k],
+                                                 .to = &path.waypoints[k + 1],
+                                                 .proof = EdgeProof::kCertificate});
+    if (report.state != EdgeState::kValid || !report.certified) return static_cast<int>(k);
   }
   return -1;
 }
@@ -250,11 +253,11 @@ InputPath AcceptSolution(const MotionChecker& checker, const PlanRequest& reques
     attempt->invalid_edge = bad;
     if (request.keep_uncertified) {
       attempt->status = "kept uncertified: edge " + std::to_string(bad) +
-                        " is invalid under our checker (a merge uses the certified parts)";
+                        " is not certified by our checker (a merge uses the certified parts)";
       return path;
     }
     return Fail(attempt, PlanFailure::kInvalidEdge,
-                "rejected: edge " + std::to_string(bad) + " is invalid under our checker");
+                "rejected: edge " + std::to_string(bad) + " is not certified by our checker");
   }
   return path;
 }

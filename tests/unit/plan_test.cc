@@ -4,6 +4,8 @@
 #include "core/plan/plan.h"
 
 #include <gtest/gtest.h>
+#include <ompl/base/ScopedState.h>
+#include <ompl/base/SpaceInformation.h>
 
 #include <atomic>
 #include <chrono>
@@ -23,6 +25,7 @@
 #include "core/merge/path_check.h"
 #include "core/motion/local_planner.h"
 #include "core/plan/baselines.h"
+#include "core/plan/ompl_bridge.h"
 
 namespace hgraph {
 namespace {
@@ -62,6 +65,7 @@ void ExpectValid(const LocalPlanner& planner, const InputPath& path) {
     const EdgeReport r = planner.CheckEdge(
         {.from = &path.waypoints[j], .to = &path.waypoints[j + 1], .proof = EdgeProof::kProfile});
     EXPECT_EQ(r.state, EdgeState::kValid) << path.name << " edge " << j;
+    EXPECT_TRUE(r.certified) << path.name << " edge " << j;
   }
 }
 
@@ -496,6 +500,42 @@ TEST(BuiltInScenesTest, PRMSolvesEveryScene) {
     ExpectValid(*f.planner, result.paths[0]);
     std::printf("%s: PRM found a path in %.1f ms\n", name.c_str(), result.attempts[0].elapsed_ms);
   }
+}
+
+// A motion to a state within a hair of an obstacle (clearance 4.6e-5; an edge of a path PRM
+// planned on double_wrench): free at every sample of its profile, yet no certificate covers it,
+// so a merge cannot take it. OMPL planning on our certified check refused it not (it took the
+// profile's "valid"), so PlanPaths returned a path the merge of the same paths then failed on.
+TEST(PlanCertifiedTest, AMotionFreeAtItsSamplesButNotCertifiedIsRefusedWhilePlanning) {
+  const Fixture f = LoadBuiltIn("double_wrench");
+  const Space& space = f.scene->space;
+  Config a(14), b(14);
+  a << 0.14903882127190848, 3.214079650041639, 0.6468998484563832, 0.661923877867914,
+      -0.20223006326142834, -0.25629448848604414, 0.6747391470733404, -2.618356669982539,
+      0.9020865079822455, -1.4454333804751818, -0.23661697012118624, -0.5888890931526779,
+      -0.28992334734801833, 0.7163564043679702;
+  b << 0.18034094074746623, 3.2068446441966856, 0.6346256758945156, 0.661136406266895,
+      -0.19681778449395684, -0.25961243940547496, 0.6758422843543636, -2.6077252141481964,
+      0.8571587667825886, -1.4085136364044177, -0.24276065777733505, -0.5964240610495646,
+      -0.28529924216408187, 0.7098943194992208;
+  const EdgeReport profiled =
+      f.planner->CheckEdge({.from = &a, .to = &b, .proof = EdgeProof::kProfile});
+  ASSERT_EQ(profiled.state, EdgeState::kValid);
+  ASSERT_FALSE(profiled.certified);
+  const PathCheckResult check =
+      CheckPaths(*f.planner, {.paths = {{.name = "e", .waypoints = {a, b}}}});
+  ASSERT_TRUE(check.paths[0].valid);
+  EXPECT_FALSE(check.paths[0].certified);
+
+  const ompl::base::SpaceInformationPtr si =
+      plan_internal::MakeSpaceInformation(*f.planner, f.resolution);
+  ompl::base::ScopedState<> from(si), to(si);
+  plan_internal::ToOmpl(space, a, from.get());
+  plan_internal::ToOmpl(space, b, to.get());
+  EXPECT_FALSE(si->checkMotion(from.get(), to.get()));
+  std::pair<ompl::base::State*, double> last_valid{nullptr, -1};
+  EXPECT_FALSE(si->checkMotion(from.get(), to.get(), last_valid));
+  EXPECT_LT(last_valid.second, 1.0);
 }
 
 // Counts the motions asked of the checker, answering as `inner` does.
