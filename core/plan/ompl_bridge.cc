@@ -51,10 +51,12 @@ class CheckerValidity final : public ob::StateValidityChecker {
 
 class CheckerMotion final : public ob::MotionValidator {
  public:
-  CheckerMotion(const ob::SpaceInformationPtr& si, const MotionChecker& checker)
-      : ob::MotionValidator(si), checker_(checker) {}
+  CheckerMotion(const ob::SpaceInformationPtr& si, const MotionChecker& checker,
+                std::function<bool()> stopped)
+      : ob::MotionValidator(si), checker_(checker), stopped_(std::move(stopped)) {}
 
   bool checkMotion(const ob::State* s1, const ob::State* s2) const override {
+    if (Stopped()) return Count(false);
     const Space& space = checker_.space();
     return Count(Certified(FromOmpl(space, s1), FromOmpl(space, s2)));
   }
@@ -64,6 +66,11 @@ class CheckerMotion final : public ob::MotionValidator {
   // s1 at the local planner's sample spacing and certifies the motion up to the last free sample.
   bool checkMotion(const ob::State* s1, const ob::State* s2,
                    std::pair<ob::State*, double>& last_valid) const override {
+    if (Stopped()) {
+      last_valid.second = 0;
+      if (last_valid.first != nullptr) si_->copyState(last_valid.first, s1);
+      return Count(false);
+    }
     const Space& space = checker_.space();
     const Config a = FromOmpl(space, s1);
     const Config b = FromOmpl(space, s2);
@@ -89,14 +96,19 @@ class CheckerMotion final : public ob::MotionValidator {
   // space instead of one per sample. The plain sampled check lets thin parts graze corners
   // between samples, and a path that grazes would be reported invalid by the merge it was
   // planned for.
-  // A motion whose certificate stalls falls back to a profile, which can find it free at every
-  // sample yet certify no cover of it (a state within a hair of an obstacle): such a motion is
-  // valid but not certified, and a merge would not take it, so it is refused here too.
+  // A motion on which conservative advancement stalls (it grazes an obstacle) is refused without
+  // the profile kCertificate would fall back to: a profile costs hundreds of distance queries
+  // (PRM checks up to ten motions per milestone and polls its stop only between milestones, so a
+  // few such profiles ran a 1 s planner to 1.9 s), and a planner has other motions to try. A
+  // profile may also find a motion free at every sample yet certify no cover of it; a merge would
+  // not take such a motion either.
   bool Certified(const Config& a, const Config& b) const {
     const EdgeReport report =
-        checker_.CheckEdge({.from = &a, .to = &b, .proof = EdgeProof::kCertificate});
+        checker_.CheckEdge({.from = &a, .to = &b, .proof = EdgeProof::kCertificateOrGiveUp});
     return report.state == EdgeState::kValid && report.certified;
   }
+
+  bool Stopped() const { return stopped_ && stopped_(); }
 
   bool Count(bool valid) const {
     // OMPL's counters are plain members; PRM calls us from two threads, but under its graph
@@ -110,6 +122,7 @@ class CheckerMotion final : public ob::MotionValidator {
   }
 
   const MotionChecker& checker_;
+  const std::function<bool()> stopped_;
 };
 
 }  // namespace
@@ -236,7 +249,8 @@ Config FromOmpl(const Space& space, const ob::State* state) {
 }
 
 ob::SpaceInformationPtr MakeSpaceInformation(const MotionChecker& checker, double resolution,
-                                             OmplMotionCheck motion_check) {
+                                             OmplMotionCheck motion_check,
+                                             std::function<bool()> stopped) {
   if (!(resolution > 0) || !std::isfinite(resolution)) {
     throw InputError("resolution",
                      "must be positive and finite, got " + std::to_string(resolution));
@@ -246,7 +260,7 @@ ob::SpaceInformationPtr MakeSpaceInformation(const MotionChecker& checker, doubl
   if (motion_check == OmplMotionCheck::kDiscrete) {
     si->setMotionValidator(std::make_shared<ob::DiscreteMotionValidator>(si));
   } else {
-    si->setMotionValidator(std::make_shared<CheckerMotion>(si, checker));
+    si->setMotionValidator(std::make_shared<CheckerMotion>(si, checker, std::move(stopped)));
   }
   si->setup();
   return si;

@@ -8,6 +8,7 @@
 #include <ompl/geometric/PathGeometric.h>
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -33,9 +34,12 @@ Config FromOmpl(const Space& space, const ompl::base::State* state);
 // kCertified the motion validator runs MotionChecker::CheckEdge, so OMPL accepts exactly the
 // motions that a merge accepts; with kDiscrete it is OMPL's DiscreteMotionValidator on the
 // checker's state validity. Thread safe as far as the checker is (PRM checks from two threads).
+// Once `stopped` (may be empty) returns true, the kCertified validator refuses every motion
+// unchecked: a planner polls its stop only between steps (PRM: between milestones, each up to ten
+// motions), and the motions of a step the stop came in can no longer be of use.
 ompl::base::SpaceInformationPtr MakeSpaceInformation(
     const MotionChecker& checker, double resolution,
-    OmplMotionCheck motion_check = OmplMotionCheck::kCertified);
+    OmplMotionCheck motion_check = OmplMotionCheck::kCertified, std::function<bool()> stopped = {});
 
 ompl::geometric::PathGeometric ToOmplPath(const ompl::base::SpaceInformationPtr& si,
                                           const Space& space, const InputPath& path);

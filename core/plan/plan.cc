@@ -15,9 +15,11 @@
 #include <ompl/geometric/planners/rrt/RRTConnect.h>
 #include <ompl/geometric/planners/rrt/RRTstar.h>
 
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <string>
 
 #include "core/common/client_text.h"
@@ -163,6 +165,11 @@ namespace {
 struct AttemptProblem {
   ob::ProblemDefinitionPtr pdef;
   ob::PlannerPtr planner;
+  // When the run's time is up (steady clock ticks; set as it starts): from then on the motion
+  // validator refuses every motion unchecked, as it does once the request's tokens stop it.
+  std::shared_ptr<std::atomic<std::chrono::steady_clock::rep>> stop_at =
+      std::make_shared<std::atomic<std::chrono::steady_clock::rep>>(
+          std::chrono::steady_clock::time_point::max().time_since_epoch().count());
 };
 
 AttemptProblem MakeAttemptProblem(const MotionChecker& checker, const PlanRequest& request,
@@ -170,12 +177,17 @@ AttemptProblem MakeAttemptProblem(const MotionChecker& checker, const PlanReques
   const Space& space = checker.space();
   auto lock = LockOmplRandomness();
   SeedOmpl(seed);
-  const ob::SpaceInformationPtr si =
-      MakeSpaceInformation(checker, request.resolution, request.motion_check);
+  AttemptProblem problem;
+  const ob::SpaceInformationPtr si = MakeSpaceInformation(
+      checker, request.resolution, request.motion_check,
+      [stop_at = problem.stop_at, cancel = request.cancel, finish = request.finish] {
+        return cancel.stopped() || finish.stopped() ||
+               std::chrono::steady_clock::now().time_since_epoch().count() >= stop_at->load();
+      });
   // PRM asks for two samplers (a valid-state sampler over a plain one, and a plain one), the
   // others for one.
   PrepareSamplers(si, 2);
-  AttemptProblem problem{.pdef = std::make_shared<ob::ProblemDefinition>(si)};
+  problem.pdef = std::make_shared<ob::ProblemDefinition>(si);
   ob::ScopedState<> s(si), g(si);
   ToOmpl(space, start, s.get());
   ToOmpl(space, goal, g.get());
@@ -204,6 +216,10 @@ void Solve(const AttemptProblem& problem, const PlanRequest& request, PlanAttemp
                                           return cancel.stopped() || finish.stopped();
                                         }));
   const auto t0 = std::chrono::steady_clock::now();
+  problem.stop_at->store((t0 + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                   std::chrono::duration<double>(request.time_s)))
+                             .time_since_epoch()
+                             .count());
   const ob::PlannerStatus status = problem.planner->solve(ptc);
   attempt->elapsed_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();

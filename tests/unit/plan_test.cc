@@ -558,6 +558,35 @@ class CountingChecker final : public MotionChecker {
   mutable std::atomic<int64_t> edges_{0};
 };
 
+// A planner polls its stop only between its steps (PRM: between milestones, each up to ten
+// motions): once the attempt is stopped, the certified motion validator refuses every motion
+// without asking the checker, so that a stop is not held up by checks whose answer is no longer
+// of use.
+TEST(PlanCertifiedTest, OnceStoppedTheMotionValidatorRefusesMotionsUnchecked) {
+  const Fixture f = LoadBuiltIn("maze");
+  const Space& space = f.scene->space;
+  const Config a = *f.scene->start;
+  const Config b = space.Interpolate(a, *f.scene->goal, 1e-3);
+  ASSERT_TRUE(
+      f.planner->CheckEdge({.from = &a, .to = &b, .proof = EdgeProof::kCertificate}).certified);
+  CountingChecker counting(*f.planner);
+  std::atomic<bool> stop{false};
+  const ompl::base::SpaceInformationPtr si = plan_internal::MakeSpaceInformation(
+      counting, f.resolution, OmplMotionCheck::kCertified, [&stop] { return stop.load(); });
+  ompl::base::ScopedState<> from(si), to(si);
+  plan_internal::ToOmpl(space, a, from.get());
+  plan_internal::ToOmpl(space, b, to.get());
+  EXPECT_TRUE(si->checkMotion(from.get(), to.get()));
+  const int64_t asked = counting.edges();
+  EXPECT_GE(asked, 1);
+  stop = true;
+  EXPECT_FALSE(si->checkMotion(from.get(), to.get()));
+  std::pair<ompl::base::State*, double> last_valid{nullptr, -1};
+  EXPECT_FALSE(si->checkMotion(from.get(), to.get(), last_valid));
+  EXPECT_EQ(last_valid.second, 0.0);
+  EXPECT_EQ(counting.edges(), asked);
+}
+
 // OMPL as shipped (OmplMotionCheck::kDiscrete) checks the states at the resolution's steps only:
 // simplifyMax then takes a shortcut straight through a wall thinner than a step, which CheckPaths
 // finds in collision, and never asks our checker for a motion. The certified check keeps the
