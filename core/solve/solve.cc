@@ -182,6 +182,7 @@ void PlanRuns(const MotionChecker& checker, const SolveRequest& request, RunBoar
                                          .time_s = time_s,
                                          .seed = PlanAttemptSeed(request.seed, index),
                                          .resolution = request.resolution,
+                                         .motion_check = request.plan_check,
                                          .keep_uncertified = true,
                                          .cancel = stop,
                                          .finish = finish});

@@ -90,6 +90,13 @@ struct SolveRequest {
   int parallel = 0;
   uint64_t seed = 1;  // run i plans with seed PlanAttemptSeed(seed, i)
   double resolution = kDefaultResolution;
+  // How the planners check their motions. kDiscrete (OMPL's own check at the resolution's
+  // samples, as OMPL ships it): a planner reaches its first path several times sooner than on
+  // the certificate, and the merge certifies what it takes, using a path's certified stretches
+  // when an edge of it grazes an obstacle between samples (docs/performance.md, "Solve": at 1 s a
+  // path on all four real-size problems instead of one). kCertified: every planned motion
+  // certified as a merge certifies it.
+  OmplMotionCheck plan_check = OmplMotionCheck::kDiscrete;
   // Called from the calling thread each time the best certified path improves.
   std::function<void(const SolveUpdate&)> on_update;
   // Called from the calling thread as each run ends (found or not), in the order they end.

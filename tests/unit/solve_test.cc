@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <future>
 #include <memory>
@@ -56,51 +57,70 @@ class SolveTest : public ::testing::Test {
 Fixture* SolveTest::maze_ = nullptr;
 
 // Every run's path goes into one H-Graph; the result is certified, between the exact ends, no
-// longer than any certified input, and each update improves on the one before.
+// longer than any certified input, and each update improves on the one before; with the planners
+// on OMPL's discrete check (the default) and on the certificate.
 TEST_F(SolveTest, MergesThePortfolioIntoACertifiedPathNoLongerThanItsInputs) {
-  SolveRequest request = MazeRequest();
-  request.portfolio = {{.planner = PlannerType::kPRM, .runs = 3},
-                       {.planner = PlannerType::kRRTConnect, .runs = 2}};
-  std::vector<SolveUpdate> updates;
-  std::vector<SolveRun> ended;
-  request.on_update = [&](const SolveUpdate& u) { updates.push_back(u); };
-  request.on_run = [&](const SolveRun& r) { ended.push_back(r); };
-  const SolveResult result = Solve(*maze_->planner, request);
-  ASSERT_TRUE(result.found) << result.message;
-  ASSERT_NE(result.session, nullptr);
-  EXPECT_EQ(result.runs.size(), 5u);
-  EXPECT_EQ(ended.size(), result.runs.size());
-  int found = 0;
-  for (size_t i = 0; i < result.runs.size(); ++i) {
-    EXPECT_EQ(result.runs[i].index, static_cast<int>(i));
-    if (result.runs[i].found) ++found;
-  }
-  EXPECT_GE(found, 1);
-  EXPECT_EQ(static_cast<int>(result.inputs.size()), found);
-  EXPECT_EQ(result.session->graph().num_paths(), found);
-  // The best result's report covers the paths merged when it was found.
-  EXPECT_GE(static_cast<int>(result.result.inputs.size()), 1);
-  EXPECT_LE(static_cast<int>(result.result.inputs.size()), found);
-
-  const InputPath& path = result.result.path;
-  EXPECT_EQ(path.waypoints.front(), *maze_->scene->start);
-  EXPECT_EQ(path.waypoints.back(), *maze_->scene->goal);
-  const PathCheckResult check = CheckPaths(*maze_->planner, {.paths = {path}});
-  EXPECT_TRUE(check.paths[0].valid);
-  EXPECT_TRUE(check.paths[0].certified);
-  const Space& space = maze_->scene->space;
-  EXPECT_NEAR(result.result.objective, PathLength(space, path), 1e-9);
-  for (const SolveRun& run : result.runs) {
-    if (run.found && run.certified) {
-      EXPECT_LE(result.result.objective, run.length + 1e-9);
+  for (const OmplMotionCheck plan_check :
+       {OmplMotionCheck::kDiscrete, OmplMotionCheck::kCertified}) {
+    SCOPED_TRACE(plan_check == OmplMotionCheck::kDiscrete ? "discrete" : "certified");
+    SolveRequest request = MazeRequest();
+    request.plan_check = plan_check;
+    request.portfolio = {{.planner = PlannerType::kPRM, .runs = 3},
+                         {.planner = PlannerType::kRRTConnect, .runs = 2}};
+    std::vector<SolveUpdate> updates;
+    std::vector<SolveRun> ended;
+    request.on_update = [&](const SolveUpdate& u) { updates.push_back(u); };
+    request.on_run = [&](const SolveRun& r) { ended.push_back(r); };
+    const SolveResult result = Solve(*maze_->planner, request);
+    ASSERT_TRUE(result.found) << result.message;
+    ASSERT_NE(result.session, nullptr);
+    EXPECT_EQ(result.runs.size(), 5u);
+    EXPECT_EQ(ended.size(), result.runs.size());
+    int found = 0;
+    for (size_t i = 0; i < result.runs.size(); ++i) {
+      EXPECT_EQ(result.runs[i].index, static_cast<int>(i));
+      if (result.runs[i].found) ++found;
     }
+    EXPECT_GE(found, 1);
+    EXPECT_EQ(static_cast<int>(result.inputs.size()), found);
+    EXPECT_EQ(result.session->graph().num_paths(), found);
+    // The best result's report covers the paths merged when it was found.
+    EXPECT_GE(static_cast<int>(result.result.inputs.size()), 1);
+    EXPECT_LE(static_cast<int>(result.result.inputs.size()), found);
+
+    const InputPath& path = result.result.path;
+    EXPECT_EQ(path.waypoints.front(), *maze_->scene->start);
+    EXPECT_EQ(path.waypoints.back(), *maze_->scene->goal);
+    const PathCheckResult check = CheckPaths(*maze_->planner, {.paths = {path}});
+    EXPECT_TRUE(check.paths[0].valid);
+    EXPECT_TRUE(check.paths[0].certified);
+    const Space& space = maze_->scene->space;
+    EXPECT_NEAR(result.result.objective, PathLength(space, path), 1e-9);
+    for (const SolveRun& run : result.runs) {
+      if (run.found && run.certified) {
+        EXPECT_LE(result.result.objective, run.length + 1e-9);
+      }
+    }
+    // Each run says whether its path is certified, as CheckPaths finds it (a path planned on
+    // OMPL's discrete check may graze an obstacle between samples; the merge takes its
+    // certified stretches).
+    for (const InputPath& input : result.inputs) {
+      const auto run = std::find_if(result.runs.begin(), result.runs.end(),
+                                    [&](const SolveRun& r) { return r.path_name == input.name; });
+      ASSERT_NE(run, result.runs.end()) << input.name;
+      const PathCheckResult own = CheckPaths(*maze_->planner, {.paths = {input}});
+      EXPECT_EQ(own.paths[0].valid && own.paths[0].certified, run->certified) << input.name;
+      if (plan_check == OmplMotionCheck::kCertified) {
+        EXPECT_TRUE(run->certified) << input.name;
+      }
+    }
+    ASSERT_EQ(static_cast<int>(updates.size()), result.updates);
+    ASSERT_GE(updates.size(), 1u);
+    for (size_t i = 1; i < updates.size(); ++i) {
+      EXPECT_LT(updates[i].objective, updates[i - 1].objective);
+    }
+    EXPECT_NEAR(updates.back().objective, result.result.objective, 1e-9);
   }
-  ASSERT_EQ(static_cast<int>(updates.size()), result.updates);
-  ASSERT_GE(updates.size(), 1u);
-  for (size_t i = 1; i < updates.size(); ++i) {
-    EXPECT_LT(updates[i].objective, updates[i - 1].objective);
-  }
-  EXPECT_NEAR(updates.back().objective, result.result.objective, 1e-9);
 }
 
 // The H-Graph serves later queries and additions as a merge's does.
