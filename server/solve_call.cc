@@ -79,7 +79,7 @@ class PathMergerService::SolveCall final : public StreamingCall<v1::SolveRespons
     }
     if (solve.portfolio.empty()) {
       for (const PortfolioEntry& e :
-           DefaultPortfolio(solve.parallel > 0 ? solve.parallel : threads)) {
+           DefaultPortfolio(solve.parallel > 0 ? solve.parallel : threads, solve.budget_s)) {
         runs += e.runs;
       }
     }

@@ -209,8 +209,10 @@ void PlanRuns(const MotionChecker& checker, const SolveRequest& request, RunBoar
 
 }  // namespace
 
-std::vector<PortfolioEntry> DefaultPortfolio(int parallel) {
-  return {{.planner = PlannerType::kPRM, .runs = std::clamp(2 * parallel, 2, kMaxSolveRuns)}};
+std::vector<PortfolioEntry> DefaultPortfolio(int parallel, double budget_s) {
+  const int per_slot = budget_s >= kLongSolveBudgetS ? 4 : 2;
+  return {
+      {.planner = PlannerType::kPRM, .runs = std::clamp(per_slot * parallel, 2, kMaxSolveRuns)}};
 }
 
 SolveRequest ResolveSolveRequest(const MotionChecker& checker, const SolveRequest& request) {
@@ -231,7 +233,7 @@ SolveRequest ResolveSolveRequest(const MotionChecker& checker, const SolveReques
                        ? out.merge.threads
                        : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   }
-  if (out.portfolio.empty()) out.portfolio = DefaultPortfolio(out.parallel);
+  if (out.portfolio.empty()) out.portfolio = DefaultPortfolio(out.parallel, out.budget_s);
   int runs = 0;
   for (size_t i = 0; i < out.portfolio.size(); ++i) {
     const int n = out.portfolio[i].runs;

@@ -30,11 +30,13 @@ struct PortfolioEntry {
   int runs = 1;
 };
 
-// The portfolio used when the request names none, for `parallel` runs at once: PRM (the
-// paper's, without cycles), two runs per parallel slot. On the bench's real-size problems it
-// beat BIT* and RRT* alone and portfolios with them at 1, 3 and 10 s (docs/performance.md,
-// "Solve").
-std::vector<PortfolioEntry> DefaultPortfolio(int parallel = 2);
+// The portfolio used when the request names none, for `parallel` runs at once and a budget of
+// `budget_s`: PRM (the paper's, without cycles), two runs per parallel slot, four from a budget
+// of kLongSolveBudgetS on (the runs end at their first path, so a long budget has time for more
+// inputs). On the bench's real-size problems it beat BIT* and RRT* alone and portfolios with
+// them at 3 and 10 s (docs/performance.md, "Solve").
+inline constexpr double kLongSolveBudgetS = 10;
+std::vector<PortfolioEntry> DefaultPortfolio(int parallel = 2, double budget_s = 3);
 // The default share of the budget given to planning (SolveRequest::plan_fraction) once a path
 // is known; while none is, the planners go on until one is.
 inline constexpr double kDefaultPlanFraction = 0.7;

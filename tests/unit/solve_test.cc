@@ -157,6 +157,10 @@ TEST_F(SolveTest, DefaultPortfolioRunsEveryKindItNames) {
     EXPECT_TRUE(seen) << PlannerTypeName(e.planner);
   }
   EXPECT_EQ(static_cast<int>(result.runs.size()), runs);
+  // A long budget has room for more runs of the planners that stop at their first path.
+  int long_runs = 0;
+  for (const PortfolioEntry& e : DefaultPortfolio(2, kLongSolveBudgetS)) long_runs += e.runs;
+  EXPECT_GT(long_runs, runs);
 }
 
 TEST_F(SolveTest, BadRequestsNameTheField) {
