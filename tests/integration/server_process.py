@@ -1,6 +1,6 @@
 """hgraph-server as a child process on loopback, for every test that runs the real server:
 test_service.py (and test_security.py, bad_input_catalogue.py through it), cli_test.py,
-tests/load/load_test.py and tests/deploy/affinity_test.py (those two put this folder on sys.path).
+tests/load/load_test.py and tests/deploy (through cluster.py), which put this folder on sys.path.
 
 The server prints one line "hgraph-server ready grpc_port=N metrics_port=M" on stdout once it
 listens (metrics_port 0 without a metrics listener). Its log (stderr) is drained by a thread into
