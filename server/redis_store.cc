@@ -20,6 +20,7 @@
 #include <cstring>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -40,6 +41,16 @@ elseif redis.call('GETRANGE', KEYS[1], 0, #p - 1) ~= p then
   return 0
 end
 redis.call('SET', KEYS[1], ARGV[2], 'PX', ARGV[3])
+return 1
+)lua";
+
+// Adds ARGV[1] to the set and makes it expire no sooner than ARGV[2] ms from now (PTTL is -1
+// for the set SADD has just created).
+constexpr const char* kAddMember = R"lua(
+redis.call('SADD', KEYS[1], ARGV[1])
+if redis.call('PTTL', KEYS[1]) < tonumber(ARGV[2]) then
+  redis.call('PEXPIRE', KEYS[1], ARGV[2])
+end
 return 1
 )lua";
 
@@ -341,6 +352,56 @@ class RedisStore final : public Store {
     std::vector<std::string> args = {"DEL"};
     args.insert(args.end(), keys.begin(), keys.end());
     Expect(Run(args), REDIS_REPLY_INTEGER, "DEL");
+  }
+
+  std::vector<std::optional<std::string>> GetMany(const std::vector<std::string>& keys) override {
+    if (keys.empty()) return {};
+    std::vector<std::string> args = {"MGET"};
+    args.insert(args.end(), keys.begin(), keys.end());
+    Reply reply = Run(args);
+    Expect(reply, REDIS_REPLY_ARRAY, "MGET");
+    if (reply.elements.size() != keys.size()) throw StoreError("MGET: a reply of another size");
+    std::vector<std::optional<std::string>> out;
+    for (Reply& e : reply.elements) {
+      if (e.type == REDIS_REPLY_NIL) {
+        out.emplace_back(std::nullopt);
+      } else {
+        Expect(e, REDIS_REPLY_STRING, "MGET");
+        out.emplace_back(std::move(e.str));
+      }
+    }
+    return out;
+  }
+
+  std::optional<std::chrono::milliseconds> TimeToLive(const std::string& key) override {
+    const Reply reply = Run({"PTTL", key});
+    Expect(reply, REDIS_REPLY_INTEGER, "PTTL");
+    if (reply.integer < 0) return std::nullopt;  // -2: absent, -1: no expiry
+    return std::chrono::milliseconds(reply.integer);
+  }
+
+  void AddMember(const std::string& key, const std::string& member,
+                 std::chrono::milliseconds ttl) override {
+    Expect(Run({"EVAL", kAddMember, "1", key, member, std::to_string(ttl.count())}),
+           REDIS_REPLY_INTEGER, "EVAL");
+  }
+
+  std::vector<std::string> Members(const std::string& key) override {
+    Reply reply = Run({"SMEMBERS", key});
+    Expect(reply, REDIS_REPLY_ARRAY, "SMEMBERS");
+    std::vector<std::string> out;
+    for (Reply& e : reply.elements) {
+      Expect(e, REDIS_REPLY_STRING, "SMEMBERS");
+      out.push_back(std::move(e.str));
+    }
+    return out;
+  }
+
+  void RemoveMembers(const std::string& key, const std::vector<std::string>& members) override {
+    if (members.empty()) return;
+    std::vector<std::string> args = {"SREM", key};
+    args.insert(args.end(), members.begin(), members.end());
+    Expect(Run(args), REDIS_REPLY_INTEGER, "SREM");
   }
 
   std::string Describe() const override {

@@ -131,6 +131,55 @@ def test_another_tenant_cannot_load_a_stored_session(replicas, tmp_path):
         assert cb.requery(merged.hgraph, "length").path == merged.result.path
 
 
+def test_list_and_delete_sessions_across_replicas(replicas, redis, tmp_path):
+    """ListSessions on any replica lists the tenant's sessions from the store, with every
+    H-Graph any replica wrote; DeleteSession on a replica that holds none of them deletes the
+    session's stored H-Graphs; another tenant can neither list nor delete them."""
+    tokens = tmp_path / "tokens.txt"
+    tokens.write_text("token-of-tenant-a-0001 team-a\ntoken-of-tenant-b-0002 team-b\n")
+    tokens.chmod(0o600)
+    a, b, c = (replicas("--auth-tokens", str(tokens)) for _ in range(3))
+    with a.client(token="token-of-tenant-a-0001") as ca:
+        first = merge_on(ca)
+        second = ca.merge(paths(), measure="length", variant="edit-distance", optimize_ms=0)
+        kept = ca.session
+        assert first.shared and second.shared
+    with a.client(token="token-of-tenant-a-0001") as ca:
+        merged_kept_apart = merge_on(ca)
+        doomed = ca.session
+    with a.client(token="token-of-tenant-b-0002") as cb:
+        cb.create_session(cb.upload_scene(DATA / "scene.json"))
+        other_tenant = cb.session
+    session_id = doomed.split("/")[1]
+    assert redis.keys(f"hgraph:1:hgraph:{session_id}:*")
+
+    # B holds none of them: it lists tenant A's two sessions from the store, and not B's.
+    with b.client(token="token-of-tenant-a-0001") as lb:
+        listed = {s.name: s for s in lb.list_sessions(page_size=1)}  # one per page
+    assert set(listed) == {kept, doomed}
+    assert set(listed[kept].hgraphs) == {first.hgraph, second.hgraph}
+    assert listed[kept].create_time.seconds > 0 and listed[kept].expire_time.seconds > 0
+    with b.client(token="token-of-tenant-b-0002") as lb:
+        assert [s.name for s in lb.list_sessions()] == [other_tenant]
+        with pytest.raises(hgraph_client.HgraphError) as e:
+            lb.delete_session(doomed)
+        assert e.value.code == grpc.StatusCode.PERMISSION_DENIED, e.value.message
+    assert redis.keys(f"hgraph:1:hgraph:{session_id}:*")
+
+    # Deleted on B: its record and its H-Graph (built on A) leave the store.
+    with b.client(token="token-of-tenant-a-0001") as db:
+        db.delete_session(doomed)
+    assert redis.keys(f"hgraph:1:hgraph:{session_id}:*") == []
+    assert redis.keys(f"hgraph:1:session:{session_id}") == []
+    with c.client(token="token-of-tenant-a-0001") as cc:
+        assert [s.name for s in cc.list_sessions()] == [kept]
+        with pytest.raises(hgraph_client.HgraphError) as e:
+            cc.requery(merged_kept_apart.hgraph, "length")
+        assert e.value.code == grpc.StatusCode.NOT_FOUND
+        # The other session still answers there.
+        assert cc.requery(first.hgraph, "length").path == first.result.path
+
+
 def test_corrupt_entries_are_refused_with_clear_errors(replicas, redis):
     a = replicas()
     with a.client() as ca:

@@ -462,7 +462,8 @@ class Client:
             _raise(e)
 
     def list_sessions(self, page_size: int = 0) -> list:
-        """This tenant's sessions on the replica that answers (every page of ListSessions)."""
+        """This tenant's sessions (every page of ListSessions): those of every replica when the
+        replicas share a store (--store redis://...), else those of the replica that answers."""
         out, token = [], ""
         try:
             while True:
