@@ -9,8 +9,9 @@ path to the new H-Graph (AddPaths), publish the H-Graph with the addition's answ
 an H-Graph some worker published under its measure, which must answer that path again.
 
 While they run, each replica in turn is restarted as a rolling update restarts a pod: SIGTERM
-(exit status 0), a new process on the same port, health SERVING. After each restart every
-H-Graph published so far is requeried through nginx under its measure: the same path.
+(exit status 0), a new process on the same port, health SERVING, the next restart 3 s after
+this one began. After each restart every H-Graph published so far is requeried through nginx
+under its measure: the same path.
 
 Fails on any call that fails after the client's retries, a different path, an H-Graph not
 written to the store, or a non-zero exit status. Usage: store_restart_test.py --server-bin B
@@ -33,6 +34,11 @@ from redis_process import Redis
 WORKERS = 3
 VARIANTS = ["all-pairs", "edit-distance", "k-nearest", "neighborhood"]
 MEASURES = ["length", "inverse-clearance"]
+# From one restart to the next: more than nginx skips a replica that refused a connection
+# (fail_timeout, deploy/base/nginx/upstreams.inc), as a rolling update that waits for each new
+# replica to be ready. Restarts closer than that leave nginx no replica for a moment ("no live
+# upstreams"), longer than the client's retries.
+SPACING_S = 3.0
 # Between a worker's rounds (merge, addition, requery): a steady load whose H-Graphs can all be
 # requeried after each restart in a few seconds.
 PAUSE_S = 0.1
@@ -140,7 +146,8 @@ def main():
     def verify(after):
         """Requeries every published H-Graph through nginx: the same path."""
         items = published.snapshot()
-        with hgraph_client.connect(nginx.front, retries=0) as v:
+        # With the client's retries on transient errors: a lost H-Graph is NOT_FOUND, not those.
+        with hgraph_client.connect(nginx.front) as v:
             for hgraph, measure, path in items:
                 try:
                     got = v.requery(hgraph, measure)
@@ -162,11 +169,12 @@ def main():
         time.sleep(2.0)  # H-Graphs on every replica before the first restart
         checked = []
         for r in replicas:
+            began = time.monotonic()
             status = r.restart()
             expect(status == 0, f"replica {r.index}: exit status {status} on SIGTERM")
             print(f"restarted replica {r.index} (exit status {status})", flush=True)
             checked.append(verify(f"after restarting replica {r.index}"))
-            time.sleep(1.0)  # load on the restarted replica
+            time.sleep(max(0.0, began + SPACING_S - time.monotonic()))  # load meanwhile
         stop.set()
         for t in threads:
             t.join(timeout=120)
@@ -175,12 +183,13 @@ def main():
         expect(counts["merge"] >= 6 and checked[0] > 0,
                f"too little load to tell: {counts}, H-Graphs checked {checked}")
         recoveries = sum(c.recoveries for c in clients)
+        repeats = sum(c.repeats for c in clients)
         loads = sum(1 for r in replicas for line in r.lines()
                     if "loaded from the store" in line and "/hgraphs/" in line)
         print(f"{counts['merge']} merges, {counts['add_paths']} additions, {counts['requery']} "
               f"requeries by {WORKERS} workers; {final} H-Graphs checked after the load; "
-              f"{loads} H-Graph loads from the store; {recoveries} client recoveries; "
-              f"{time.monotonic() - started:.1f} s")
+              f"{loads} H-Graph loads from the store; the workers' clients: {recoveries} "
+              f"recoveries, {repeats} calls repeated; {time.monotonic() - started:.1f} s")
     finally:
         stop.set()
         for t in threads:
