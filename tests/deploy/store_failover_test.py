@@ -51,7 +51,9 @@ def main():
     work = pathlib.Path(tempfile.mkdtemp(prefix="hgraph-store-failover-"))
     (work / "redis").mkdir()
     redis = Redis(work / "redis")
-    replicas = [Replica(args.server_bin, i, "--store", redis.url) for i in range(2)]
+    # Long store timeouts: a loaded test machine's slow Redis is not a store down (store_test.py).
+    store = ("--store", redis.url, "--store-timeout-ms", "5000")
+    replicas = [Replica(args.server_bin, i, *store) for i in range(2)]
     nginx = None
     clients = []
     try:
@@ -72,7 +74,7 @@ def main():
             merged.append(outcome)
 
         # 2. Scale to three and reload nginx: the ring moves, every H-Graph still answers.
-        replicas.append(Replica(args.server_bin, 2, "--store", redis.url))
+        replicas.append(Replica(args.server_bin, 2, *store))
         nginx.reload(replicas)
         for c, m in zip(clients, merged):
             again = c.requery(m.hgraph, "length")
