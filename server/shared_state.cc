@@ -35,12 +35,17 @@ class Fields {
     ++count_;
   }
   void Add(const google::protobuf::Message& m) { Add(m.SerializeAsString()); }
-  std::string Take() {
+  std::string Take() const {
     std::string out;
-    Append(out, count_);
-    out += body_;
+    AppendTo(out);
     return out;
   }
+  // Appends what Take returns.
+  void AppendTo(std::string& out) const {
+    Append(out, count_);
+    out += body_;
+  }
+  size_t size() const { return 8 + body_.size(); }
 
  private:
   static void Append(std::string& out, uint64_t n) {
@@ -427,8 +432,13 @@ SharedState::Write SharedState::PutHGraph(const HGraphRecord& record, uint64_t e
   fields.Add(record.answer);
   fields.Add(names.Take());
   fields.Add(record.session);
-  const std::string body = fields.Take();
-  const std::string value = std::string(kHGraphTag) + Hex16(version) + Sha256Hex(body) + body;
+  // The header, its checksum filled in once the body is there (one copy of the snapshot).
+  std::string value;
+  value.reserve(kHeaderSize + fields.size());
+  value.append(kHGraphTag).append(Hex16(version)).append(kHeaderSize - kVersionEnd, '0');
+  fields.AppendTo(value);
+  value.replace(kVersionEnd, kHeaderSize - kVersionEnd,
+                Sha256Hex(std::string_view(value).substr(kHeaderSize)));
   const std::string key = HGraphKey(record.name);
   try {
     bool stored = true;
@@ -507,7 +517,10 @@ std::optional<std::pair<uint64_t, HGraphRecord>> SharedState::GetHGraph(const st
       record.generation = *generation;
       record.fingerprint = std::string(f[8]);
       for (std::string_view n : *names) record.input_names.emplace_back(n);
-      record.session = std::string(f[11]);
+      // The snapshot, the last field (it ends the value): kept in the value's own buffer, not
+      // copied. The views into the value are not used after this.
+      bytes->erase(0, static_cast<size_t>(f[11].data() - bytes->data()));
+      record.session = std::move(*bytes);
     } else {
       size.reset();
     }
