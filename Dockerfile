@@ -3,7 +3,7 @@
 # the ctest docker.runtime_libs), as a non-root user.
 #   docker build -t hgraph-server:0.1.0 .
 #   docker run --rm -p 50051:50051 -p 9464:9464 hgraph-server:0.1.0
-#   docker run --rm --entrypoint hgraph hgraph-server:0.1.0 health --server HOST:50051
+#   docker run --rm --entrypoint hgraph hgraph-server:0.1.0 health --server HOST:50052
 
 FROM debian:bookworm AS build
 WORKDIR /src
@@ -34,8 +34,13 @@ COPY --from=build /out/bin/ /usr/local/bin/
 # The built-in scenes, for `hgraph plan|merge --scene /usr/share/hgraph/scenes/<name>/scene.json`.
 COPY scenes/ /usr/share/hgraph/scenes/
 USER 10001:10001
-EXPOSE 50051 9464
+# The health-only port (--health-listen, plaintext, grpc.health.v1 only) is on whatever
+# arguments the container gets: from the environment, so that the HEALTHCHECK works when the
+# gRPC port speaks TLS (--tls-cert), as Kubernetes' probes of deploy/ do. `--health-listen ""`
+# (or `docker run -e HGRAPH_HEALTH_LISTEN=`) turns it off; the HEALTHCHECK then fails.
+ENV HGRAPH_HEALTH_LISTEN=0.0.0.0:50052
+EXPOSE 50051 9464 50052
 HEALTHCHECK --interval=10s --timeout=5s --start-period=5s --retries=3 \
-  CMD ["hgraph", "health", "--server", "127.0.0.1:50051"]
+  CMD ["hgraph", "health", "--server", "127.0.0.1:50052"]
 ENTRYPOINT ["hgraph-server"]
 CMD ["--listen=0.0.0.0:50051", "--metrics-listen=0.0.0.0:9464"]

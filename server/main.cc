@@ -108,10 +108,13 @@ int main(int argc, char** argv) {
   app.add_option("--metrics-listen", flags.metrics_listen,
                  "Prometheus /metrics address host:port (port 0 picks a free one; empty = off)")
       ->capture_default_str();
+  // From the environment too, so that the image (Dockerfile: HGRAPH_HEALTH_LISTEN) keeps the
+  // port its HEALTHCHECK probes whatever arguments a deployment passes.
   app.add_option("--health-listen", flags.health_listen,
                  "a second gRPC address, plaintext, serving only grpc.health.v1 (for probes that "
                  "cannot speak TLS, such as Kubernetes' native gRPC probes; port 0 picks a free "
-                 "one; empty = off)");
+                 "one; empty = off; the image sets HGRAPH_HEALTH_LISTEN to 0.0.0.0:50052)")
+      ->envname("HGRAPH_HEALTH_LISTEN");
   app.add_option("--threads", flags.threads, "worker threads for all calls (0 = all cores)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();

@@ -17,10 +17,13 @@
 
 #include <atomic>
 #include <cerrno>
+#include <cstdlib>
 #include <cstring>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/common/error.h"
@@ -43,6 +46,16 @@ redis.call('SET', KEYS[1], ARGV[2], 'PX', ARGV[3])
 return 1
 )lua";
 
+// Adds ARGV[1] to the set and makes it expire no sooner than ARGV[2] ms from now (PTTL is -1
+// for the set SADD has just created).
+constexpr const char* kAddMember = R"lua(
+redis.call('SADD', KEYS[1], ARGV[1])
+if redis.call('PTTL', KEYS[1]) < tonumber(ARGV[2]) then
+  redis.call('PEXPIRE', KEYS[1], ARGV[2])
+end
+return 1
+)lua";
+
 std::string OpenSslError() {
   const unsigned long code = ERR_get_error();
   if (code == 0) return "no OpenSSL error queued";
@@ -51,6 +64,9 @@ std::string OpenSslError() {
   ERR_clear_error();
   return text;
 }
+
+// Bulk strings from this size on are read without hiredis (Connection::Receive).
+constexpr long long kDirectBulkBytes = 64 << 10;
 
 // One reply, copied out of hiredis's.
 struct Reply {
@@ -88,12 +104,13 @@ class Connection {
       std::vector<std::string> auth = {"AUTH"};
       if (!options.username.empty()) auth.push_back(options.username);
       auth.push_back(options.password);
-      const Reply reply = Command(auth, deadline);
+      const Reply reply = Command({auth.begin(), auth.end()}, deadline);
       // The reply never echoes the password; the error text is Redis's own.
       if (reply.type == REDIS_REPLY_ERROR) throw StoreError("AUTH refused: " + reply.str);
     }
     if (options.address.db != 0) {
-      const Reply reply = Command({"SELECT", std::to_string(options.address.db)}, deadline);
+      const std::string db = std::to_string(options.address.db);
+      const Reply reply = Command({"SELECT", db}, deadline);
       if (reply.type == REDIS_REPLY_ERROR) throw StoreError("SELECT refused: " + reply.str);
     }
   }
@@ -104,19 +121,22 @@ class Connection {
     if (fd_ >= 0) ::close(fd_);
   }
 
-  Reply Command(const std::vector<std::string>& args, Clock::time_point deadline) {
-    std::vector<const char*> argv;
-    std::vector<size_t> lengths;
-    for (const std::string& a : args) {
-      argv.push_back(a.data());
-      lengths.push_back(a.size());
+  // Sends the command (RESP: an array of bulk strings) and returns its reply. Arguments of
+  // kDirectBulkBytes or more (a snapshot) are sent from where they are, not copied.
+  Reply Command(const std::vector<std::string_view>& args, Clock::time_point deadline) {
+    std::string wire = "*" + std::to_string(args.size()) + "\r\n";
+    for (const std::string_view a : args) {
+      wire += "$" + std::to_string(a.size()) + "\r\n";
+      if (a.size() >= static_cast<size_t>(kDirectBulkBytes)) {
+        Send(wire.data(), wire.size(), deadline);
+        Send(a.data(), a.size(), deadline);
+        wire.clear();
+      } else {
+        wire += a;
+      }
+      wire += "\r\n";
     }
-    char* formatted = nullptr;
-    const int length = redisFormatCommandArgv(&formatted, static_cast<int>(argv.size()),
-                                              argv.data(), lengths.data());
-    if (length < 0) throw StoreError("cannot format a command");
-    std::unique_ptr<char, decltype(&redisFreeCommand)> command(formatted, &redisFreeCommand);
-    Send(formatted, static_cast<size_t>(length), deadline);
+    Send(wire.data(), wire.size(), deadline);
     return Receive(deadline);
   }
 
@@ -227,8 +247,49 @@ class Connection {
     }
   }
 
+  // Some bytes of the reply (at most `size`, at least one), waiting until the deadline.
+  size_t ReadSome(char* into, size_t size, Clock::time_point deadline) {
+    for (;;) {
+      if (ssl_) {
+        size_t n = 0;
+        const int rc = SSL_read_ex(ssl_.get(), into, size, &n);
+        if (rc == 1) return n;
+        const int error = SSL_get_error(ssl_.get(), rc);
+        if (error == SSL_ERROR_WANT_READ && Wait(fd_, POLLIN, deadline)) continue;
+        if (error == SSL_ERROR_WANT_WRITE && Wait(fd_, POLLOUT, deadline)) continue;
+        throw StoreError("TLS read failed or timed out: " + OpenSslError());
+      }
+      const ssize_t got = ::recv(fd_, into, size, 0);
+      if (got > 0) return static_cast<size_t>(got);
+      if (got == 0) throw StoreError("the store closed the connection");
+      if ((errno == EAGAIN || errno == EINTR) && Wait(fd_, POLLIN, deadline)) continue;
+      throw StoreError(errno == EAGAIN ? std::string("read timed out")
+                                       : std::string("read failed: ") + std::strerror(errno));
+    }
+  }
+
   Reply Receive(Clock::time_point deadline) {
     char buffer[16384];
+    // The reply's first line: a large bulk string (an H-Graph's snapshot, tens of MB) is read
+    // straight into its string, not through hiredis's buffer and a copy of it.
+    std::string head;
+    for (;;) {
+      head.append(buffer, ReadSome(buffer, sizeof(buffer), deadline));
+      const size_t eol = head.find("\r\n");
+      if (eol == std::string::npos) {
+        if (head.size() < 32) continue;  // a first line is shorter: hiredis says what is wrong
+        break;
+      }
+      if (head[0] == '$') {
+        char* end = nullptr;
+        const long long size = std::strtoll(head.c_str() + 1, &end, 10);
+        if (end == head.c_str() + eol && size >= kDirectBulkBytes) {
+          return ReadBulk(head, eol + 2, static_cast<size_t>(size), deadline);
+        }
+      }
+      break;
+    }
+    Feed(head.data(), head.size());
     for (;;) {
       void* raw = nullptr;
       if (redisReaderGetReply(reader_.get(), &raw) != REDIS_OK) {
@@ -240,28 +301,30 @@ class Connection {
         freeReplyObject(reply);
         return out;
       }
-      size_t n = 0;
-      if (ssl_) {
-        const int rc = SSL_read_ex(ssl_.get(), buffer, sizeof(buffer), &n);
-        if (rc != 1) {
-          const int error = SSL_get_error(ssl_.get(), rc);
-          if (error == SSL_ERROR_WANT_READ && Wait(fd_, POLLIN, deadline)) continue;
-          if (error == SSL_ERROR_WANT_WRITE && Wait(fd_, POLLOUT, deadline)) continue;
-          throw StoreError("TLS read failed or timed out: " + OpenSslError());
-        }
-      } else {
-        const ssize_t got = ::recv(fd_, buffer, sizeof(buffer), 0);
-        if (got == 0) throw StoreError("the store closed the connection");
-        if (got < 0) {
-          if ((errno == EAGAIN || errno == EINTR) && Wait(fd_, POLLIN, deadline)) continue;
-          throw StoreError(errno == EAGAIN ? std::string("read timed out")
-                                           : std::string("read failed: ") + std::strerror(errno));
-        }
-        n = static_cast<size_t>(got);
-      }
-      if (redisReaderFeed(reader_.get(), buffer, n) != REDIS_OK) {
-        throw StoreError("cannot buffer a reply");
-      }
+      Feed(buffer, ReadSome(buffer, sizeof(buffer), deadline));
+    }
+  }
+
+  // A bulk string of `size` bytes whose first bytes (and its header) are in `head`, from `start`.
+  Reply ReadBulk(const std::string& head, size_t start, size_t size, Clock::time_point deadline) {
+    const size_t whole = size + 2;  // and its \r\n
+    if (head.size() - start > whole) throw StoreError("unexpected bytes after a reply");
+    Reply out;
+    out.type = REDIS_REPLY_STRING;
+    out.str.resize(whole);
+    size_t got = head.size() - start;
+    std::memcpy(out.str.data(), head.data() + start, got);
+    while (got < whole) got += ReadSome(out.str.data() + got, whole - got, deadline);
+    if (out.str[size] != '\r' || out.str[size + 1] != '\n') {
+      throw StoreError("malformed reply: a bulk string without its end");
+    }
+    out.str.resize(size);
+    return out;
+  }
+
+  void Feed(const char* bytes, size_t size) {
+    if (redisReaderFeed(reader_.get(), bytes, size) != REDIS_OK) {
+      throw StoreError("cannot buffer a reply");
     }
   }
 
@@ -312,14 +375,13 @@ class RedisStore final : public Store {
   }
 
   void Set(const std::string& key, std::string_view value, std::chrono::milliseconds ttl) override {
-    Expect(Run({"SET", key, std::string(value), "PX", std::to_string(ttl.count())}),
-           REDIS_REPLY_STATUS, "SET");
+    Expect(Run({"SET", key, value, "PX", std::to_string(ttl.count())}), REDIS_REPLY_STATUS, "SET");
   }
 
   bool SetIfPrefix(const std::string& key, std::string_view expected_prefix, std::string_view value,
                    std::chrono::milliseconds ttl) override {
-    const Reply reply = Run({"EVAL", kSetIfPrefix, "1", key, std::string(expected_prefix),
-                             std::string(value), std::to_string(ttl.count())});
+    const Reply reply =
+        Run({"EVAL", kSetIfPrefix, "1", key, expected_prefix, value, std::to_string(ttl.count())});
     Expect(reply, REDIS_REPLY_INTEGER, "EVAL");
     return reply.integer == 1;
   }
@@ -338,9 +400,59 @@ class RedisStore final : public Store {
 
   void Delete(const std::vector<std::string>& keys) override {
     if (keys.empty()) return;
-    std::vector<std::string> args = {"DEL"};
+    std::vector<std::string_view> args = {"DEL"};
     args.insert(args.end(), keys.begin(), keys.end());
     Expect(Run(args), REDIS_REPLY_INTEGER, "DEL");
+  }
+
+  std::vector<std::optional<std::string>> GetMany(const std::vector<std::string>& keys) override {
+    if (keys.empty()) return {};
+    std::vector<std::string_view> args = {"MGET"};
+    args.insert(args.end(), keys.begin(), keys.end());
+    Reply reply = Run(args);
+    Expect(reply, REDIS_REPLY_ARRAY, "MGET");
+    if (reply.elements.size() != keys.size()) throw StoreError("MGET: a reply of another size");
+    std::vector<std::optional<std::string>> out;
+    for (Reply& e : reply.elements) {
+      if (e.type == REDIS_REPLY_NIL) {
+        out.emplace_back(std::nullopt);
+      } else {
+        Expect(e, REDIS_REPLY_STRING, "MGET");
+        out.emplace_back(std::move(e.str));
+      }
+    }
+    return out;
+  }
+
+  std::optional<std::chrono::milliseconds> TimeToLive(const std::string& key) override {
+    const Reply reply = Run({"PTTL", key});
+    Expect(reply, REDIS_REPLY_INTEGER, "PTTL");
+    if (reply.integer < 0) return std::nullopt;  // -2: absent, -1: no expiry
+    return std::chrono::milliseconds(reply.integer);
+  }
+
+  void AddMember(const std::string& key, const std::string& member,
+                 std::chrono::milliseconds ttl) override {
+    Expect(Run({"EVAL", kAddMember, "1", key, member, std::to_string(ttl.count())}),
+           REDIS_REPLY_INTEGER, "EVAL");
+  }
+
+  std::vector<std::string> Members(const std::string& key) override {
+    Reply reply = Run({"SMEMBERS", key});
+    Expect(reply, REDIS_REPLY_ARRAY, "SMEMBERS");
+    std::vector<std::string> out;
+    for (Reply& e : reply.elements) {
+      Expect(e, REDIS_REPLY_STRING, "SMEMBERS");
+      out.push_back(std::move(e.str));
+    }
+    return out;
+  }
+
+  void RemoveMembers(const std::string& key, const std::vector<std::string>& members) override {
+    if (members.empty()) return;
+    std::vector<std::string_view> args = {"SREM", key};
+    args.insert(args.end(), members.begin(), members.end());
+    Expect(Run(args), REDIS_REPLY_INTEGER, "SREM");
   }
 
   std::string Describe() const override {
@@ -361,7 +473,7 @@ class RedisStore final : public Store {
   }
 
   // Runs one command on an idle connection (or a new one); a connection that failed is dropped.
-  Reply Run(const std::vector<std::string>& args) {
+  Reply Run(const std::vector<std::string_view>& args) {
     const Clock::time_point now = Clock::now();
     if (now < Clock::time_point(Clock::duration(down_until_.load()))) {
       throw StoreError("the store failed less than " +

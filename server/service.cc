@@ -242,8 +242,8 @@ void PathMergerService::SyncStore() {
                          ? now - options_.session_ttl
                          : last_refresh_;
   last_refresh_ = now;
-  for (const v1::Session& session : sessions_.UsedSince(since)) {
-    shared_->Refresh(session.name(),
+  for (const auto& [tenant, session] : sessions_.UsedSince(since)) {
+    shared_->Refresh(session.name(), tenant,
                      std::vector<std::string>(session.hgraphs().begin(), session.hgraphs().end()),
                      session.scene(), scenes_.BlobsOf(session.scene()));
   }

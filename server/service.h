@@ -154,6 +154,11 @@ class PathMergerService final : public v1::PathMerger::CallbackService {
   // hold is read from it (and adopted) before NOT_FOUND.
   v1::Session TouchSession(const std::string& name, const std::string& field,
                            const std::string& tenant);
+  // ListSessions with a shared store: the tenant's sessions held here or listed in the store,
+  // in name order after `after`, at most `page_size` (`more` set when others follow), each with
+  // the H-Graphs any replica wrote to the store. Neither loads nor extends a session.
+  void ListSharedSessions(const std::string& tenant, const std::string& after, size_t page_size,
+                          bool* more, v1::ListSessionsResponse* response);
   // The H-Graph as the shared store holds it, loaded, cached and adopted by its session; null
   // when there is no store, it holds no such H-Graph, or what it holds is unsound (logged).
   // Its session must be held here (the caller has touched it).

@@ -322,11 +322,12 @@ void SessionRegistry::ForgetHGraph(const std::string& hgraph) {
   list.erase(std::remove(list.begin(), list.end(), hgraph), list.end());
 }
 
-std::vector<v1::Session> SessionRegistry::UsedSince(Clock::time_point since) const {
+std::vector<std::pair<std::string, v1::Session>> SessionRegistry::UsedSince(
+    Clock::time_point since) const {
   std::lock_guard lock(mutex_);
-  std::vector<v1::Session> out;
+  std::vector<std::pair<std::string, v1::Session>> out;
   for (const auto& [name, record] : sessions_) {
-    if (record.expire_time > since + ttl_) out.push_back(ToProto(name, record));
+    if (record.expire_time > since + ttl_) out.emplace_back(record.tenant, ToProto(name, record));
   }
   return out;
 }

@@ -15,6 +15,7 @@
 #include <map>
 #include <mutex>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "hgraph/v1/scene.pb.h"
@@ -88,9 +89,9 @@ class SessionRegistry {
   // Forgets a kept H-Graph name (evicted from this replica's cache while the shared store still
   // holds it): StateOf says kUnknown, and a later call may load it again.
   void ForgetHGraph(const std::string& hgraph);
-  // The sessions used since `since` (their expiry extended after since + ttl), for refreshing
-  // their entries in the shared store.
-  std::vector<v1::Session> UsedSince(Clock::time_point since) const;
+  // The sessions used since `since` (their expiry extended after since + ttl), each with its
+  // tenant, for refreshing their entries in the shared store.
+  std::vector<std::pair<std::string, v1::Session>> UsedSince(Clock::time_point since) const;
 
   // Removes sessions idle past their expiry; returns the names of their H-Graphs.
   std::vector<std::string> ExpireIdle(Clock::time_point now);

@@ -2,9 +2,11 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <cinttypes>
 #include <cstdio>
 #include <cstring>
+#include <set>
 #include <utility>
 
 #include "core/common/client_text.h"
@@ -33,12 +35,17 @@ class Fields {
     ++count_;
   }
   void Add(const google::protobuf::Message& m) { Add(m.SerializeAsString()); }
-  std::string Take() {
+  std::string Take() const {
     std::string out;
-    Append(out, count_);
-    out += body_;
+    AppendTo(out);
     return out;
   }
+  // Appends what Take returns.
+  void AppendTo(std::string& out) const {
+    Append(out, count_);
+    out += body_;
+  }
+  size_t size() const { return 8 + body_.size(); }
 
  private:
   static void Append(std::string& out, uint64_t n) {
@@ -129,6 +136,14 @@ std::string SharedState::HGraphKey(const std::string& hgraph) {
       hgraph.substr(std::strlen("sessions/"), at - std::strlen("sessions/"));
   return std::string(kPrefix) + "hgraph:" + session + ":" +
          hgraph.substr(at + std::strlen("/hgraphs/"));
+}
+
+std::string SharedState::TenantSessionsKey(const std::string& tenant) {
+  return std::string(kPrefix) + "tenant:" + Sha256Hex(tenant) + ":sessions";
+}
+// "sessions/<id>" -> "hgraph:1:session-hgraphs:<id>"
+std::string SharedState::SessionHGraphsKey(const std::string& session) {
+  return std::string(kPrefix) + "session-hgraphs:" + session.substr(std::strlen("sessions/"));
 }
 
 SharedState::SharedState(std::shared_ptr<Store> store, std::chrono::milliseconds ttl,
@@ -239,6 +254,7 @@ void SharedState::PutSession(const std::string& name, const SessionRecord& recor
   fields.Add(std::to_string(record.create_time_ns));
   try {
     store_->Set(SessionKey(name), std::string(kSessionTag) + fields.Take(), ttl_);
+    store_->AddMember(TenantSessionsKey(record.tenant), name, ttl_);
     Succeeded();
   } catch (const StoreError& e) {
     Failed("put_session", e.what());
@@ -256,7 +272,13 @@ std::optional<SessionRecord> SharedState::GetSession(const std::string& name) {
     return std::nullopt;
   }
   if (!bytes) return std::nullopt;
-  const std::string_view value(*bytes);
+  std::optional<SessionRecord> record = ParseSession(key, *bytes);
+  if (record) metrics_.store_loads.Increment({{"kind", "session"}});
+  return record;
+}
+
+std::optional<SessionRecord> SharedState::ParseSession(const std::string& key,
+                                                       std::string_view value) {
   std::optional<std::vector<std::string_view>> fields;
   if (value.starts_with(kSessionTag)) fields = SplitFields(value.substr(kSessionTag.size()));
   std::optional<int64_t> size;
@@ -274,15 +296,93 @@ std::optional<SessionRecord> SharedState::GetSession(const std::string& name) {
   record.scene.set_sha256(std::string((*fields)[1]));
   record.scene.set_size_bytes(*size);
   record.create_time_ns = *created;
-  metrics_.store_loads.Increment({{"kind", "session"}});
   return record;
 }
 
-void SharedState::DeleteSession(const std::string& name, const std::vector<std::string>& hgraphs) {
-  std::vector<std::string> keys = {SessionKey(name)};
-  for (const std::string& h : hgraphs) keys.push_back(HGraphKey(h));
+std::optional<std::map<std::string, SessionRecord>> SharedState::ListSessions(
+    const std::string& tenant) {
+  const std::string list_key = TenantSessionsKey(tenant);
+  std::vector<std::string> names;
+  std::vector<std::optional<std::string>> values;
+  try {
+    for (std::string& name : store_->Members(list_key)) {
+      // Only names of the form this server writes ("sessions/<id>", one level).
+      if (name.starts_with("sessions/") && name.size() > std::strlen("sessions/") &&
+          name.find('/', std::strlen("sessions/")) == std::string::npos) {
+        names.push_back(std::move(name));
+      }
+    }
+    std::vector<std::string> keys;
+    for (const std::string& name : names) keys.push_back(SessionKey(name));
+    values = store_->GetMany(keys);
+    Succeeded();
+  } catch (const StoreError& e) {
+    Failed("list_sessions", e.what());
+    return std::nullopt;
+  }
+  std::map<std::string, SessionRecord> out;
+  std::vector<std::string> gone;
+  for (size_t i = 0; i < names.size(); ++i) {
+    if (!values[i]) {
+      gone.push_back(names[i]);  // expired, or deleted
+      continue;
+    }
+    std::optional<SessionRecord> record = ParseSession(SessionKey(names[i]), *values[i]);
+    // Another tenant's record in this tenant's list: not listed.
+    if (record && record->tenant == tenant) out.emplace(names[i], std::move(*record));
+  }
+  if (!gone.empty()) {
+    try {
+      store_->RemoveMembers(list_key, gone);
+    } catch (const StoreError& e) {
+      Failed("list_sessions", e.what());
+    }
+  }
+  return out;
+}
+
+std::vector<std::string> SharedState::HGraphsOf(const std::string& session) {
+  std::vector<std::string> out;
+  try {
+    for (std::string& name : store_->Members(SessionHGraphsKey(session))) {
+      // Only this session's H-Graphs, whatever the set holds.
+      if (name.starts_with(session + "/hgraphs/") &&
+          name.size() > session.size() + std::strlen("/hgraphs/")) {
+        out.push_back(std::move(name));
+      }
+    }
+    Succeeded();
+  } catch (const StoreError& e) {
+    Failed("list_hgraphs", e.what());
+    return {};
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+std::optional<std::chrono::milliseconds> SharedState::SessionTimeToLive(
+    const std::string& session) {
+  try {
+    std::optional<std::chrono::milliseconds> ttl = store_->TimeToLive(SessionKey(session));
+    Succeeded();
+    if (!ttl) return std::nullopt;
+    return std::max(*ttl - std::chrono::duration_cast<std::chrono::milliseconds>(kTtlMargin),
+                    std::chrono::milliseconds(0));
+  } catch (const StoreError& e) {
+    Failed("get_session", e.what());
+    return std::nullopt;
+  }
+}
+
+void SharedState::DeleteSession(const std::string& name, const std::string& tenant,
+                                const std::vector<std::string>& hgraphs) {
+  std::set<std::string> all(hgraphs.begin(), hgraphs.end());
+  for (std::string& h : HGraphsOf(name)) all.insert(std::move(h));
+  std::vector<std::string> keys = {SessionKey(name), SessionHGraphsKey(name)};
+  for (const std::string& h : all) keys.push_back(HGraphKey(h));
   try {
     store_->Delete(keys);
+    store_->RemoveMembers(TenantSessionsKey(tenant), {name});
     Succeeded();
   } catch (const StoreError& e) {
     Failed("delete", e.what());
@@ -292,19 +392,23 @@ void SharedState::DeleteSession(const std::string& name, const std::vector<std::
 void SharedState::DeleteHGraph(const std::string& hgraph) {
   try {
     store_->Delete({HGraphKey(hgraph)});
+    store_->RemoveMembers(SessionHGraphsKey(hgraph.substr(0, hgraph.find("/hgraphs/"))), {hgraph});
     Succeeded();
   } catch (const StoreError& e) {
     Failed("delete", e.what());
   }
 }
 
-void SharedState::Refresh(const std::string& session, const std::vector<std::string>& hgraphs,
-                          const v1::Digest& scene, const std::vector<std::string>& blob_sha256s) {
-  std::vector<std::string> keys = {SessionKey(session), SceneKey(scene.sha256())};
+void SharedState::Refresh(const std::string& session, const std::string& tenant,
+                          const std::vector<std::string>& hgraphs, const v1::Digest& scene,
+                          const std::vector<std::string>& blob_sha256s) {
+  std::vector<std::string> keys = {SessionKey(session), SessionHGraphsKey(session),
+                                   SceneKey(scene.sha256())};
   for (const std::string& h : hgraphs) keys.push_back(HGraphKey(h));
   for (const std::string& b : blob_sha256s) keys.push_back(BlobKey(b));
   try {
     store_->Expire(keys, ttl_);
+    store_->AddMember(TenantSessionsKey(tenant), session, ttl_);
     Succeeded();
   } catch (const StoreError& e) {
     Failed("refresh", e.what());
@@ -328,13 +432,21 @@ SharedState::Write SharedState::PutHGraph(const HGraphRecord& record, uint64_t e
   fields.Add(record.answer);
   fields.Add(names.Take());
   fields.Add(record.session);
-  const std::string body = fields.Take();
-  const std::string value = std::string(kHGraphTag) + Hex16(version) + Sha256Hex(body) + body;
+  // The header, its checksum filled in once the body is there (one copy of the snapshot).
+  std::string value;
+  value.reserve(kHeaderSize + fields.size());
+  value.append(kHGraphTag).append(Hex16(version)).append(kHeaderSize - kVersionEnd, '0');
+  fields.AppendTo(value);
+  value.replace(kVersionEnd, kHeaderSize - kVersionEnd,
+                Sha256Hex(std::string_view(value).substr(kHeaderSize)));
   const std::string key = HGraphKey(record.name);
   try {
     bool stored = true;
     if (expected_version == 0) {
       store_->Set(key, value, ttl_);
+      // Listed under its session, so that deleting the session on any replica deletes it.
+      store_->AddMember(SessionHGraphsKey(record.name.substr(0, record.name.find("/hgraphs/"))),
+                        record.name, ttl_);
     } else {
       stored =
           store_->SetIfPrefix(key, std::string(kHGraphTag) + Hex16(expected_version), value, ttl_);
@@ -405,7 +517,10 @@ std::optional<std::pair<uint64_t, HGraphRecord>> SharedState::GetHGraph(const st
       record.generation = *generation;
       record.fingerprint = std::string(f[8]);
       for (std::string_view n : *names) record.input_names.emplace_back(n);
-      record.session = std::string(f[11]);
+      // The snapshot, the last field (it ends the value): kept in the value's own buffer, not
+      // copied. The views into the value are not used after this.
+      bytes->erase(0, static_cast<size_t>(f[11].data() - bytes->data()));
+      record.session = std::move(*bytes);
     } else {
       size.reset();
     }

@@ -4,6 +4,9 @@
 //   hgraph:1:scene:<sha256>         the scene's canonical bytes (checked on read)
 //   hgraph:1:session:<id>           a session record: tenant, scene digest, create time
 //   hgraph:1:hgraph:<id>:<hgraph>   an H-Graph record: a versioned snapshot (compare-and-set)
+//   hgraph:1:tenant:<sha256>:sessions  a set: the names of a tenant's sessions (ListSessions;
+//                                   <sha256> of the tenant's name)
+//   hgraph:1:session-hgraphs:<id>   a set: the names of a session's H-Graphs (DeleteSession)
 //
 // Every entry expires: a session's record and its H-Graphs after the session's time-to-live
 // (extended while the session is used), blobs and scenes with the sessions that use them.
@@ -19,10 +22,12 @@
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "hgraph/v1/scene.pb.h"
@@ -71,15 +76,27 @@ class SharedState {
   void PutScene(const v1::Digest& digest, const std::string& canonical_bytes);
   std::optional<v1::Scene> GetScene(const v1::Digest& digest);
 
+  // Writes the session's record and lists it among its tenant's sessions.
   void PutSession(const std::string& name, const SessionRecord& record);
   std::optional<SessionRecord> GetSession(const std::string& name);
-  // Removes the session's record and the named H-Graphs' records.
-  void DeleteSession(const std::string& name, const std::vector<std::string>& hgraphs);
+  // The tenant's sessions the store holds, by name (nullopt when the store failed). Names whose
+  // record has expired are dropped from the tenant's list.
+  std::optional<std::map<std::string, SessionRecord>> ListSessions(const std::string& tenant);
+  // The names of the session's H-Graphs that any replica wrote, in name order (none on failure).
+  std::vector<std::string> HGraphsOf(const std::string& session);
+  // How long the session's record lives yet, less the margin the store adds to it (nullopt:
+  // absent, or the store failed).
+  std::optional<std::chrono::milliseconds> SessionTimeToLive(const std::string& session);
+  // Removes the session's record, its records of H-Graphs (the named ones, and every one any
+  // replica wrote), and its name from the tenant's list.
+  void DeleteSession(const std::string& name, const std::string& tenant,
+                     const std::vector<std::string>& hgraphs);
   void DeleteHGraph(const std::string& hgraph);
-  // Extends the expiry of a session's entries: its record, its H-Graphs, its scene and the
-  // scene's blobs (mesh digests).
-  void Refresh(const std::string& session, const std::vector<std::string>& hgraphs,
-               const v1::Digest& scene, const std::vector<std::string>& blob_sha256s);
+  // Extends the expiry of a session's entries: its record, its H-Graphs and their list, its
+  // tenant's list of sessions, its scene and the scene's blobs (mesh digests).
+  void Refresh(const std::string& session, const std::string& tenant,
+               const std::vector<std::string>& hgraphs, const v1::Digest& scene,
+               const std::vector<std::string>& blob_sha256s);
 
   enum class Write {
     kStored,    // the record holds what was written
@@ -101,6 +118,8 @@ class SharedState {
   static std::string SceneKey(const std::string& sha256);
   static std::string SessionKey(const std::string& session);
   static std::string HGraphKey(const std::string& hgraph);
+  static std::string TenantSessionsKey(const std::string& tenant);
+  static std::string SessionHGraphsKey(const std::string& session);
 
  private:
   // Counts a failed operation and logs it, at most once per interval (with the number of
@@ -109,6 +128,8 @@ class SharedState {
   void Succeeded();
   // Counts and logs an entry refused as unsound.
   void Refused(const char* kind, const std::string& key, const std::string& why);
+  // A session record read under `key`, or nullopt (refused) when it does not parse.
+  std::optional<SessionRecord> ParseSession(const std::string& key, std::string_view value);
 
   std::shared_ptr<Store> store_;
   const std::chrono::milliseconds ttl_;

@@ -67,6 +67,48 @@ void MemoryStore::Delete(const std::vector<std::string>& keys) {
   for (const std::string& key : keys) entries_.erase(key);
 }
 
+std::vector<std::optional<std::string>> MemoryStore::GetMany(const std::vector<std::string>& keys) {
+  std::lock_guard lock(mutex_);
+  std::vector<std::optional<std::string>> out;
+  for (const std::string& key : keys) {
+    const Entry* entry = Live(key);
+    out.push_back(entry == nullptr ? std::nullopt : std::optional<std::string>(entry->value));
+  }
+  return out;
+}
+
+std::optional<std::chrono::milliseconds> MemoryStore::TimeToLive(const std::string& key) {
+  std::lock_guard lock(mutex_);
+  const Entry* entry = Live(key);
+  if (entry == nullptr) return std::nullopt;
+  return std::chrono::duration_cast<std::chrono::milliseconds>(entry->expire - Clock::now());
+}
+
+void MemoryStore::AddMember(const std::string& key, const std::string& member,
+                            std::chrono::milliseconds ttl) {
+  std::lock_guard lock(mutex_);
+  const Clock::time_point expire = Clock::now() + ttl;
+  Entry* entry = Live(key);
+  if (entry == nullptr) entry = &(entries_[key] = Entry{.expire = expire});
+  entry->members.insert(member);
+  entry->expire = std::max(entry->expire, expire);
+}
+
+std::vector<std::string> MemoryStore::Members(const std::string& key) {
+  std::lock_guard lock(mutex_);
+  const Entry* entry = Live(key);
+  if (entry == nullptr) return {};
+  return {entry->members.begin(), entry->members.end()};
+}
+
+void MemoryStore::RemoveMembers(const std::string& key, const std::vector<std::string>& members) {
+  std::lock_guard lock(mutex_);
+  Entry* entry = Live(key);
+  if (entry == nullptr) return;
+  for (const std::string& m : members) entry->members.erase(m);
+  if (entry->members.empty()) entries_.erase(key);  // as Redis drops an empty set
+}
+
 StoreAddress ParseStoreAddress(const std::string& text) {
   const auto bad = [&](const std::string& why) {
     return InputError("--store",

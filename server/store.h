@@ -14,6 +14,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -52,6 +53,19 @@ class Store {
   // Extends the keys that exist to expire after `ttl`; absent keys are skipped.
   virtual void Expire(const std::vector<std::string>& keys, std::chrono::milliseconds ttl) = 0;
   virtual void Delete(const std::vector<std::string>& keys) = 0;
+  // The values of `keys`, in their order (nullopt for an absent one). Throws StoreError.
+  virtual std::vector<std::optional<std::string>> GetMany(const std::vector<std::string>& keys) = 0;
+  // How long the key lives yet; nullopt when it is absent or never expires.
+  virtual std::optional<std::chrono::milliseconds> TimeToLive(const std::string& key) = 0;
+
+  // Sets of strings under a key (the indexes: a tenant's sessions, a session's H-Graphs).
+  // Adds `member` to the set, which then expires no sooner than `ttl` (> 0) from now (Expire
+  // and Delete apply to sets too). Throws StoreError.
+  virtual void AddMember(const std::string& key, const std::string& member,
+                         std::chrono::milliseconds ttl) = 0;
+  // The set's members, in no particular order (none when absent).
+  virtual std::vector<std::string> Members(const std::string& key) = 0;
+  virtual void RemoveMembers(const std::string& key, const std::vector<std::string>& members) = 0;
   // Where the store is, for logs ("redis://host:6379/0"; never a password).
   virtual std::string Describe() const = 0;
 };
@@ -68,11 +82,18 @@ class MemoryStore final : public Store {
   bool Exists(const std::string& key) override;
   void Expire(const std::vector<std::string>& keys, std::chrono::milliseconds ttl) override;
   void Delete(const std::vector<std::string>& keys) override;
+  std::vector<std::optional<std::string>> GetMany(const std::vector<std::string>& keys) override;
+  std::optional<std::chrono::milliseconds> TimeToLive(const std::string& key) override;
+  void AddMember(const std::string& key, const std::string& member,
+                 std::chrono::milliseconds ttl) override;
+  std::vector<std::string> Members(const std::string& key) override;
+  void RemoveMembers(const std::string& key, const std::vector<std::string>& members) override;
   std::string Describe() const override { return "memory"; }
 
  private:
   struct Entry {
     std::string value;
+    std::set<std::string> members;  // a set's (AddMember)
     Clock::time_point expire;
   };
   // Under mutex_: the live entry of `key`, or nullptr (an expired one is dropped).

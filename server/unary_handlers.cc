@@ -3,8 +3,12 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <chrono>
 #include <functional>
+#include <map>
 #include <mutex>
+#include <optional>
+#include <set>
 #include <string>
 #include <utility>
 
@@ -128,16 +132,67 @@ grpc::ServerUnaryReactor* PathMergerService::ListSessions(grpc::CallbackServerCo
         const size_t page_size =
             static_cast<size_t>(request->page_size() > 0 ? request->page_size() : kDefaultPageSize);
         bool more = false;
-        for (v1::Session& s :
-             sessions_.List(call->tenant(), request->page_token(), page_size, &more)) {
-          *response->add_sessions() = std::move(s);
+        if (!shared_) {
+          for (v1::Session& s :
+               sessions_.List(call->tenant(), request->page_token(), page_size, &more)) {
+            *response->add_sessions() = std::move(s);
+          }
+        } else {
+          ListSharedSessions(call->tenant(), request->page_token(), page_size, &more, response);
         }
         if (more) {
           response->set_next_page_token(response->sessions(response->sessions_size() - 1).name());
         }
       },
-      /*on_worker=*/false);
+      /*on_worker=*/shared_ != nullptr);
   return call;
+}
+
+void PathMergerService::ListSharedSessions(const std::string& tenant, const std::string& after,
+                                           size_t page_size, bool* more,
+                                           v1::ListSessionsResponse* response) {
+  // The tenant's sessions this replica holds, and those the store lists (created or loaded by
+  // any replica); the store down: this replica's alone.
+  std::map<std::string, std::optional<v1::Session>> all;
+  for (v1::Session& s : sessions_.List(tenant, after)) {
+    std::string name = s.name();
+    all.emplace(std::move(name), std::move(s));
+  }
+  std::optional<std::map<std::string, SessionRecord>> stored = shared_->ListSessions(tenant);
+  if (stored) {
+    for (const auto& [name, record] : *stored) {
+      if (name > after) all.emplace(name, std::nullopt);
+    }
+  }
+  for (auto& [name, held] : all) {
+    if (static_cast<size_t>(response->sessions_size()) == page_size) {
+      *more = true;
+      break;
+    }
+    v1::Session* out = response->add_sessions();
+    if (held) {
+      *out = std::move(*held);
+    } else {
+      const SessionRecord& record = stored->at(name);
+      out->set_name(name);
+      *out->mutable_scene() = record.scene;
+      out->mutable_create_time()->set_seconds(record.create_time_ns / 1'000'000'000);
+      out->mutable_create_time()->set_nanos(
+          static_cast<int32_t>(record.create_time_ns % 1'000'000'000));
+      if (const auto left = shared_->SessionTimeToLive(name)) {
+        const int64_t expire_ms = std::chrono::duration_cast<std::chrono::milliseconds>(
+                                      SessionRegistry::Clock::now().time_since_epoch() + *left)
+                                      .count();
+        out->mutable_expire_time()->set_seconds(expire_ms / 1000);
+        out->mutable_expire_time()->set_nanos(static_cast<int32_t>(expire_ms % 1000) * 1'000'000);
+      }
+    }
+    // Every replica's H-Graphs of the session, after those this replica holds.
+    const std::set<std::string> listed(out->hgraphs().begin(), out->hgraphs().end());
+    for (std::string& h : shared_->HGraphsOf(name)) {
+      if (!listed.contains(h)) out->add_hgraphs(std::move(h));
+    }
+  }
 }
 
 grpc::ServerUnaryReactor* PathMergerService::DeleteSession(grpc::CallbackServerContext* context,
@@ -146,10 +201,11 @@ grpc::ServerUnaryReactor* PathMergerService::DeleteSession(grpc::CallbackServerC
   auto* call = new UnaryCall(this, context, "DeleteSession", request->name());
   call->Run(
       [=, this](const CancelToken&) {
+        // Loads a session only the store holds (the tenant checked there, as here).
         if (shared_) TouchSession(request->name(), "name", call->tenant());
         const std::vector<std::string> hgraphs =
             sessions_.Delete(request->name(), "name", call->tenant());
-        if (shared_) shared_->DeleteSession(request->name(), hgraphs);
+        if (shared_) shared_->DeleteSession(request->name(), call->tenant(), hgraphs);
         DropHGraphs(hgraphs);
       },
       /*on_worker=*/shared_ != nullptr);

@@ -18,95 +18,15 @@ import pathlib
 import random
 import re
 import shutil
-import signal
-import socket
 import subprocess
 import sys
 import tempfile
-import time
 
 import grpc
 
 import hgraph_client
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "integration"))
-from server_process import ServerProcess, free_port  # noqa: E402
-
-SKIP = 77
-
-
-class Replica(ServerProcess):
-    def __init__(self, binary, index):
-        self.index = index
-        super().__init__(binary, "--listen", "127.0.0.1:0", "--metrics-listen", "", "--threads",
-                         "1", "--drain-s", "0", "--grace-s", "2", name=f"replica {index}")
-
-    def sessions(self):
-        """Session names in this replica's call log lines ("<Method> session=<name> ...")."""
-        names = set()
-        for line in list(self.log):
-            m = re.search(r" session=(sessions/[0-9a-f]{32})", line)
-            if m:
-                names.add(m.group(1))
-        return names
-
-    def calls(self, session):
-        return [l for l in list(self.log) if f" session={session}" in l]
-
-    def stop(self):
-        return super().stop(timeout=30)
-
-
-def start_nginx(deploy, replicas, work):
-    nginx = shutil.which("nginx") or ("/usr/sbin/nginx" if pathlib.Path("/usr/sbin/nginx").exists()
-                                      else None)
-    if nginx is None:
-        return None, None
-    port = free_port()
-    conf = work / "conf"
-    (conf / "conf.d").mkdir(parents=True)
-    for d in ("body", "proxy", "fastcgi", "uwsgi", "scgi"):
-        (work / "tmp" / d).mkdir(parents=True)
-    front = (deploy / "base" / "nginx" / "hgraph.conf").read_text()
-    templated, n = re.subn(r"listen 50051 http2;", f"listen 127.0.0.1:{port} http2;", front)
-    assert n == 1, "deploy/base/nginx/hgraph.conf: no 'listen 50051 http2;' to template"
-    (conf / "conf.d" / "hgraph.conf").write_text(templated)
-    # The Kubernetes upstream line, with its name:port replaced by each replica's.
-    k8s = [l for l in (deploy / "base" / "nginx" / "upstreams.inc").read_text().splitlines()
-           if l.startswith("server ")]
-    assert len(k8s) == 1, "deploy/base/nginx/upstreams.inc: expected one server line"
-    (conf / "conf.d" / "upstreams.inc").write_text("".join(
-        re.sub(r"server \S+", f"server 127.0.0.1:{r.port}", k8s[0]) + "\n" for r in replicas))
-    (conf / "nginx.conf").write_text(f"""
-daemon off;
-worker_processes 1;
-pid {work}/nginx.pid;
-error_log {work}/error.log info;
-events {{ worker_connections 256; }}
-http {{
-    access_log {work}/access.log;
-    client_body_temp_path {work}/tmp/body;
-    proxy_temp_path {work}/tmp/proxy;
-    fastcgi_temp_path {work}/tmp/fastcgi;
-    uwsgi_temp_path {work}/tmp/uwsgi;
-    scgi_temp_path {work}/tmp/scgi;
-    include conf.d/hgraph.conf;
-}}
-""")
-    proc = subprocess.Popen([nginx, "-p", str(work), "-c", str(conf / "nginx.conf"),
-                             "-e", str(work / "error.log")],
-                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    for _ in range(100):
-        if proc.poll() is not None:
-            raise RuntimeError("nginx exited: " + proc.stdout.read() +
-                               (work / "error.log").read_text())
-        try:
-            socket.create_connection(("127.0.0.1", port), timeout=1).close()
-            return proc, f"127.0.0.1:{port}"
-        except OSError:
-            time.sleep(0.1)
-    proc.kill()
-    raise RuntimeError("nginx did not listen")
+from cluster import SKIP, Nginx, Replica, nginx_binary
 
 
 def main():
@@ -116,7 +36,7 @@ def main():
     parser.add_argument("--deploy", required=True, type=pathlib.Path)
     parser.add_argument("--data", required=True, type=pathlib.Path)
     args = parser.parse_args()
-    if shutil.which("nginx") is None and not pathlib.Path("/usr/sbin/nginx").exists():
+    if nginx_binary() is None:
         print("SKIP: nginx is not installed (scripts/install-deps.sh installs it)")
         return SKIP
 
@@ -134,7 +54,8 @@ def main():
     nginx = None
     clients = []
     try:
-        nginx, front = start_nginx(args.deploy, replicas, work)
+        nginx = Nginx(args.deploy, work, replicas)
+        front = nginx.front
         print(f"nginx on {front}; replicas on ports {[r.port for r in replicas]}")
 
         # 1. Sessions through nginx, named from a seeded generator (the test is repeatable).
@@ -226,18 +147,14 @@ def main():
         for c in clients:
             c.close()
         if nginx is not None:
-            nginx.send_signal(signal.SIGQUIT)
-            try:
-                nginx.wait(timeout=20)
-            except subprocess.TimeoutExpired:
-                nginx.kill()
+            nginx.stop()
         for r in replicas:
             r.stop()
         if failures:
             for r in replicas:
-                print(f"--- replica {r.index} log\n" + "".join(r.log[-30:]))
-            if (work / "error.log").exists():
-                print("--- nginx error.log\n" + (work / "error.log").read_text()[-3000:])
+                print(r.report())
+            if nginx is not None:
+                print("--- nginx error.log\n" + nginx.error_log())
         shutil.rmtree(work, ignore_errors=True)
     print(f"{len(failures)} problems")
     return 1 if failures else 0

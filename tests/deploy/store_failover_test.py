@@ -3,8 +3,8 @@
 correctness.
 
 Starts a redis-server, two hgraph-server processes with --store redis://..., and Debian's nginx
-with deploy/base/nginx/hgraph.conf (as affinity_test.py does), all on loopback ports chosen now;
-every client runs without retries (a recovery would hide a lost H-Graph). Then:
+with deploy/base/nginx/hgraph.conf (cluster.py), all on loopback ports chosen now; every client
+runs without retries (a recovery would hide a lost H-Graph). Then:
   1. merges in six sessions through nginx;
   2. scales from two replicas to three and reloads nginx (part of the hash ring moves): every
      session's next call, a requery of its H-Graph, answers as before, without a check;
@@ -16,41 +16,14 @@ redis-server.
 import argparse
 import pathlib
 import random
-import re
 import shutil
-import signal
-import subprocess
 import sys
 import tempfile
-import time
 
 import hgraph_client
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "integration"))
-from server_process import ServerProcess, free_port  # noqa: E402
-from affinity_test import start_nginx  # noqa: E402
-from store_test import Redis  # noqa: E402
-
-SKIP = 77
-
-
-class Replica(ServerProcess):
-    def __init__(self, binary, index, store):
-        self.index = index
-        super().__init__(binary, "--listen", "127.0.0.1:0", "--metrics-listen", "", "--threads",
-                         "1", "--drain-s", "0", "--grace-s", "2", "--store", store,
-                         name=f"replica {index}")
-
-    def built(self, hgraph_name):
-        session = hgraph_name.split("/hgraphs/")[0]
-        return any(" MergePaths session=" + session in line for line in list(self.log))
-
-
-def write_upstreams(deploy, work, replicas):
-    k8s = [l for l in (deploy / "base" / "nginx" / "upstreams.inc").read_text().splitlines()
-           if l.startswith("server ")]
-    (work / "conf" / "conf.d" / "upstreams.inc").write_text("".join(
-        re.sub(r"server \S+", f"server 127.0.0.1:{r.port}", k8s[0]) + "\n" for r in replicas))
+from cluster import SKIP, Nginx, Replica, nginx_binary, redis_binary
+from redis_process import Redis
 
 
 def main():
@@ -59,10 +32,10 @@ def main():
     parser.add_argument("--deploy", required=True, type=pathlib.Path)
     parser.add_argument("--data", required=True, type=pathlib.Path)
     args = parser.parse_args()
-    if shutil.which("nginx") is None and not pathlib.Path("/usr/sbin/nginx").exists():
+    if nginx_binary() is None:
         print("SKIP: nginx is not installed (scripts/install-deps.sh installs it)")
         return SKIP
-    if shutil.which("redis-server") is None:
+    if redis_binary() is None:
         print("SKIP: redis-server is not installed (scripts/install-deps.sh installs it)")
         return SKIP
 
@@ -78,11 +51,14 @@ def main():
     work = pathlib.Path(tempfile.mkdtemp(prefix="hgraph-store-failover-"))
     (work / "redis").mkdir()
     redis = Redis(work / "redis")
-    replicas = [Replica(args.server_bin, i, redis.url) for i in range(2)]
+    # Long store timeouts: a loaded test machine's slow Redis is not a store down (store_test.py).
+    store = ("--store", redis.url, "--store-timeout-ms", "5000")
+    replicas = [Replica(args.server_bin, i, *store) for i in range(2)]
     nginx = None
     clients = []
     try:
-        nginx, front = start_nginx(args.deploy, replicas, work)
+        nginx = Nginx(args.deploy, work, replicas)
+        front = nginx.front
         print(f"nginx on {front}; replicas on ports {[r.port for r in replicas]}")
 
         # 1. Merges through nginx, in sessions named from a seeded generator.
@@ -98,15 +74,13 @@ def main():
             merged.append(outcome)
 
         # 2. Scale to three and reload nginx: the ring moves, every H-Graph still answers.
-        replicas.append(Replica(args.server_bin, 2, redis.url))
-        write_upstreams(args.deploy, work, replicas)
-        nginx.send_signal(signal.SIGHUP)
-        time.sleep(1.0)  # the new workers take over
+        replicas.append(Replica(args.server_bin, 2, *store))
+        nginx.reload(replicas)
         for c, m in zip(clients, merged):
             again = c.requery(m.hgraph, "length")
             expect(again.path == m.result.path, f"{m.hgraph}: another path after scaling")
             expect(again.stats.collision_checks == 0, f"{m.hgraph}: checks after scaling")
-        loads = sum(1 for r in replicas for line in list(r.log)
+        loads = sum(1 for r in replicas for line in r.lines()
                     if "loaded from the store" in line and "/hgraphs/" in line)
         print(f"after scaling to 3: {len(merged)} H-Graphs answered, {loads} of them loaded by "
               "a replica that had not held them")
@@ -132,20 +106,16 @@ def main():
         for c in clients:
             c.close()
         if nginx is not None:
-            nginx.send_signal(signal.SIGQUIT)
-            try:
-                nginx.wait(timeout=20)
-            except subprocess.TimeoutExpired:
-                nginx.kill()
+            nginx.stop()
         for r in replicas:
             if r.proc.poll() is None:
-                r.stop(timeout=30)
+                r.stop()
         redis.stop()
         if failures:
             for r in replicas:
-                print(f"--- replica {r.index} log\n" + "".join(r.log[-30:]))
-            if (work / "error.log").exists():
-                print("--- nginx error.log\n" + (work / "error.log").read_text()[-3000:])
+                print(r.report())
+            if nginx is not None:
+                print("--- nginx error.log\n" + nginx.error_log())
         shutil.rmtree(work, ignore_errors=True)
     print(f"{len(failures)} problems")
     return 1 if failures else 0

@@ -1,6 +1,6 @@
 """hgraph-server as a child process on loopback, for every test that runs the real server:
 test_service.py (and test_security.py, bad_input_catalogue.py through it), cli_test.py,
-tests/load/load_test.py and tests/deploy/affinity_test.py (those two put this folder on sys.path).
+tests/load/load_test.py and tests/deploy (through cluster.py), which put this folder on sys.path.
 
 The server prints one line "hgraph-server ready grpc_port=N metrics_port=M" on stdout once it
 listens (metrics_port 0 without a metrics listener). Its log (stderr) is drained by a thread into
@@ -30,11 +30,12 @@ def free_port():
 
 class ServerProcess:
     """One hgraph-server process started with `binary` and `flags`; `name` is what a failure to
-    start calls it. Attributes: proc, port, metrics_port, target ("127.0.0.1:<port>"), log."""
+    start calls it; `env` its environment (default: this process's). Attributes: proc, port,
+    metrics_port, health_port, target ("127.0.0.1:<port>"), log."""
 
-    def __init__(self, binary, *flags, name="server"):
+    def __init__(self, binary, *flags, name="server", env=None):
         self.proc = subprocess.Popen([binary, *flags], stdout=subprocess.PIPE,
-                                     stderr=subprocess.PIPE, text=True)
+                                     stderr=subprocess.PIPE, text=True, env=env)
         line = self.proc.stdout.readline()
         match = re.search(r"grpc_port=(\d+) metrics_port=(\d+)", line)
         if not match:

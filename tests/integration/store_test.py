@@ -9,7 +9,6 @@ Run through CTest (which sets the environment), or by hand:
 """
 import os
 import pathlib
-import shutil
 import signal
 import socket
 import subprocess
@@ -20,75 +19,15 @@ import grpc
 import pytest
 
 import hgraph_client
+from redis_process import REDIS, Redis
 from server_process import ServerProcess, free_port
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 DATA = ROOT / "tests" / "data" / "circles"
 SERVER = os.environ.get("HGRAPH_SERVER", str(ROOT / "build" / "hgraph-server"))
-REDIS = shutil.which("redis-server") or "/usr/bin/redis-server"
 
 pytestmark = pytest.mark.skipif(not pathlib.Path(REDIS).exists(),
                                 reason="redis-server is not installed (scripts/install-deps.sh)")
-
-
-class Redis:
-    """redis-server on 127.0.0.1:<port>, its data in `folder` (append-only file on)."""
-
-    def __init__(self, folder, port=None):
-        self.folder = pathlib.Path(folder)
-        self.port = port or free_port()
-        self.proc = None
-        self.start()
-
-    def start(self):
-        self.proc = subprocess.Popen(
-            [REDIS, "--port", str(self.port), "--bind", "127.0.0.1", "--save", "",
-             "--appendonly", "yes", "--appendfsync", "always", "--dir", str(self.folder),
-             "--protected-mode", "no", "--daemonize", "no"],
-            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-        for _ in range(200):
-            if self.proc.poll() is not None:
-                raise RuntimeError("redis-server exited: " + self.proc.stdout.read())
-            try:
-                if self.command("PING") == "PONG":
-                    return
-            except (OSError, RuntimeError):  # not listening yet, or LOADING its append-only file
-                time.sleep(0.02)
-        raise RuntimeError("redis-server did not answer")
-
-    def stop(self, sig=signal.SIGTERM):
-        if self.proc.poll() is None:
-            self.proc.send_signal(sig)
-            self.proc.wait(timeout=20)
-
-    @property
-    def url(self):
-        return f"redis://127.0.0.1:{self.port}"
-
-    def command(self, *args):
-        """One command over a raw socket (RESP); the reply's string, integer or None."""
-        parts = [a if isinstance(a, bytes) else str(a).encode() for a in args]
-        wire = b"*%d\r\n" % len(parts) + b"".join(b"$%d\r\n%s\r\n" % (len(p), p) for p in parts)
-        with socket.create_connection(("127.0.0.1", self.port), timeout=5) as s:
-            s.sendall(wire)
-            f = s.makefile("rb")
-            line = f.readline()
-            kind, rest = line[:1], line[1:-2]
-            if kind == b"+":
-                return rest.decode()
-            if kind == b":":
-                return int(rest)
-            if kind == b"-":
-                raise RuntimeError(rest.decode())
-            if kind == b"$":
-                n = int(rest)
-                return None if n < 0 else f.read(n + 2)[:-2]
-            if kind == b"*":
-                return [f.readline() for _ in range(2 * int(rest))][1::2]
-            raise RuntimeError(f"unexpected reply {line!r}")
-
-    def keys(self, pattern):
-        return [k.strip().decode() for k in self.command("KEYS", pattern)]
 
 
 class Replica(ServerProcess):
@@ -190,6 +129,55 @@ def test_another_tenant_cannot_load_a_stored_session(replicas, tmp_path):
     # The owner's token still reaches it on B.
     with b.client(token="token-of-tenant-a-0001") as cb:
         assert cb.requery(merged.hgraph, "length").path == merged.result.path
+
+
+def test_list_and_delete_sessions_across_replicas(replicas, redis, tmp_path):
+    """ListSessions on any replica lists the tenant's sessions from the store, with every
+    H-Graph any replica wrote; DeleteSession on a replica that holds none of them deletes the
+    session's stored H-Graphs; another tenant can neither list nor delete them."""
+    tokens = tmp_path / "tokens.txt"
+    tokens.write_text("token-of-tenant-a-0001 team-a\ntoken-of-tenant-b-0002 team-b\n")
+    tokens.chmod(0o600)
+    a, b, c = (replicas("--auth-tokens", str(tokens)) for _ in range(3))
+    with a.client(token="token-of-tenant-a-0001") as ca:
+        first = merge_on(ca)
+        second = ca.merge(paths(), measure="length", variant="edit-distance", optimize_ms=0)
+        kept = ca.session
+        assert first.shared and second.shared
+    with a.client(token="token-of-tenant-a-0001") as ca:
+        merged_kept_apart = merge_on(ca)
+        doomed = ca.session
+    with a.client(token="token-of-tenant-b-0002") as cb:
+        cb.create_session(cb.upload_scene(DATA / "scene.json"))
+        other_tenant = cb.session
+    session_id = doomed.split("/")[1]
+    assert redis.keys(f"hgraph:1:hgraph:{session_id}:*")
+
+    # B holds none of them: it lists tenant A's two sessions from the store, and not B's.
+    with b.client(token="token-of-tenant-a-0001") as lb:
+        listed = {s.name: s for s in lb.list_sessions(page_size=1)}  # one per page
+    assert set(listed) == {kept, doomed}
+    assert set(listed[kept].hgraphs) == {first.hgraph, second.hgraph}
+    assert listed[kept].create_time.seconds > 0 and listed[kept].expire_time.seconds > 0
+    with b.client(token="token-of-tenant-b-0002") as lb:
+        assert [s.name for s in lb.list_sessions()] == [other_tenant]
+        with pytest.raises(hgraph_client.HgraphError) as e:
+            lb.delete_session(doomed)
+        assert e.value.code == grpc.StatusCode.PERMISSION_DENIED, e.value.message
+    assert redis.keys(f"hgraph:1:hgraph:{session_id}:*")
+
+    # Deleted on B: its record and its H-Graph (built on A) leave the store.
+    with b.client(token="token-of-tenant-a-0001") as db:
+        db.delete_session(doomed)
+    assert redis.keys(f"hgraph:1:hgraph:{session_id}:*") == []
+    assert redis.keys(f"hgraph:1:session:{session_id}") == []
+    with c.client(token="token-of-tenant-a-0001") as cc:
+        assert [s.name for s in cc.list_sessions()] == [kept]
+        with pytest.raises(hgraph_client.HgraphError) as e:
+            cc.requery(merged_kept_apart.hgraph, "length")
+        assert e.value.code == grpc.StatusCode.NOT_FOUND
+        # The other session still answers there.
+        assert cc.requery(first.hgraph, "length").path == first.result.path
 
 
 def test_corrupt_entries_are_refused_with_clear_errors(replicas, redis):

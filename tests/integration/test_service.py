@@ -11,6 +11,7 @@ import os
 import pathlib
 import re
 import signal
+import socket
 import subprocess
 import threading
 import time
@@ -511,6 +512,33 @@ def test_unknown_session_and_hgraph(client):
     with pytest.raises(hgraph_client.HgraphError) as e:
         client.get_session(unknown)
     assert e.value.code == grpc.StatusCode.NOT_FOUND
+
+
+def test_client_repeats_calls_only_after_transient_errors(client):
+    """Requery, the reads and add_paths with a request_id are repeated as they are after
+    UNAVAILABLE (nothing listens: a replica restarting), `retries` times; NOT_FOUND is raised at
+    once, and add_paths without a request_id is never repeated (it could add twice)."""
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        closed = f"127.0.0.1:{s.getsockname()[1]}"
+    hgraph = "sessions/" + "0" * 32 + "/hgraphs/x"
+    with hgraph_client.Client(closed, retries=2, backoff_s=0.01) as down:
+        for call in (lambda: down.requery(hgraph, "length"), lambda: down.get_hgraph(hgraph),
+                     lambda: down.get_session("sessions/" + "0" * 32),
+                     lambda: down.list_sessions(),
+                     lambda: down.add_paths(hgraph, input_paths(), request_id="r1")):
+            before = down.repeats
+            with pytest.raises(hgraph_client.HgraphError) as e:
+                call()
+            assert e.value.code == grpc.StatusCode.UNAVAILABLE and e.value.transient
+            assert down.repeats == before + 2
+        with pytest.raises(hgraph_client.HgraphError):
+            down.add_paths(hgraph, input_paths())
+        assert down.repeats == 10
+    with pytest.raises(hgraph_client.HgraphError) as e:
+        client.requery(client.session + "/hgraphs/999", "length")
+    assert e.value.code == grpc.StatusCode.NOT_FOUND and not e.value.transient
+    assert client.repeats == 0
 
 
 def test_over_limit_batch_and_bad_values(client):

@@ -4,11 +4,13 @@
 #include <grpcpp/grpcpp.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <memory>
 #include <optional>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "core/adapter/path_io.h"
 #include "core/adapter/scene_proto.h"
@@ -153,6 +155,61 @@ TEST_F(SharedStoreTest, SurvivesTheBuilder) {
   EXPECT_EQ(session.scene().sha256(), session_.scene().sha256());
 }
 
+// ListSessions on a replica that holds none of the tenant's sessions lists them from the store,
+// each with the H-Graphs written there, and pages through them; B lists what A created.
+TEST_F(SharedStoreTest, ListsTheSessionsOfEveryReplica) {
+  const v1::MergePathsResponse merged = MergeOnA();
+  const std::string first = session_.name();
+  MergeOnA();  // a second session on A
+  const std::string second = session_.name();
+  std::vector<v1::Session> listed;
+  std::string token;
+  do {
+    grpc::ClientContext context;
+    v1::ListSessionsRequest request;
+    request.set_page_size(1);
+    request.set_page_token(token);
+    v1::ListSessionsResponse page;
+    ASSERT_TRUE(b_->stub->ListSessions(&context, request, &page).ok());
+    ASSERT_LE(page.sessions_size(), 1);
+    listed.insert(listed.end(), page.sessions().begin(), page.sessions().end());
+    token = page.next_page_token();
+  } while (!token.empty());
+  ASSERT_EQ(listed.size(), 2u);
+  EXPECT_EQ(std::min(first, second), listed[0].name());
+  EXPECT_EQ(std::max(first, second), listed[1].name());
+  const v1::Session& one = listed[0].name() == first ? listed[0] : listed[1];
+  ASSERT_EQ(one.hgraphs_size(), 1);
+  EXPECT_EQ(one.hgraphs(0), merged.hgraph());
+  EXPECT_EQ(one.scene().sha256(), session_.scene().sha256());
+  EXPECT_GT(one.expire_time().seconds(), one.create_time().seconds());
+  // Listing loads nothing: B holds no session yet (GetSession would load it).
+  EXPECT_EQ(b_->metrics.Render().find("hgraph_store_loads_total{kind=\"session\"} 1"),
+            std::string::npos);
+}
+
+// DeleteSession on a replica that never held the session's H-Graph deletes it from the store:
+// no replica finds it afterwards.
+TEST_F(SharedStoreTest, DeletingOnAnotherReplicaDeletesEveryStoredHGraph) {
+  const v1::MergePathsResponse merged = MergeOnA();
+  ASSERT_TRUE(store_->Exists(SharedState::HGraphKey(merged.hgraph())));
+  {
+    grpc::ClientContext context;
+    v1::DeleteSessionRequest request;
+    request.set_name(session_.name());
+    v1::DeleteSessionResponse response;
+    ASSERT_TRUE(b_->stub->DeleteSession(&context, request, &response).ok());
+  }
+  EXPECT_FALSE(store_->Exists(SharedState::HGraphKey(merged.hgraph())));
+  EXPECT_FALSE(store_->Exists(SharedState::SessionKey(session_.name())));
+  EXPECT_FALSE(store_->Exists(SharedState::SessionHGraphsKey(session_.name())));
+  EXPECT_TRUE(store_->Members(SharedState::TenantSessionsKey("")).empty());
+  Replica c(store_);
+  v1::RequeryResponse response;
+  EXPECT_EQ(Requery(c, merged.hgraph(), v1::Measure(), &response).error_code(),
+            grpc::StatusCode::NOT_FOUND);
+}
+
 // Additions on both replicas, in turn, each on the copy it held: neither is lost. B's copy is
 // stale after A's addition; B loads the stored one before adding to it.
 TEST_F(SharedStoreTest, AdditionsOnTwoReplicasAreNotLost) {
@@ -212,6 +269,20 @@ class LaggingStore final : public Store {
     store_->Expire(keys, ttl);
   }
   void Delete(const std::vector<std::string>& keys) override { store_->Delete(keys); }
+  std::vector<std::optional<std::string>> GetMany(const std::vector<std::string>& keys) override {
+    return store_->GetMany(keys);
+  }
+  std::optional<std::chrono::milliseconds> TimeToLive(const std::string& key) override {
+    return store_->TimeToLive(key);
+  }
+  void AddMember(const std::string& key, const std::string& member,
+                 std::chrono::milliseconds ttl) override {
+    store_->AddMember(key, member, ttl);
+  }
+  std::vector<std::string> Members(const std::string& key) override { return store_->Members(key); }
+  void RemoveMembers(const std::string& key, const std::vector<std::string>& members) override {
+    store_->RemoveMembers(key, members);
+  }
   std::string Describe() const override { return "lagging memory"; }
 
  private:
@@ -322,6 +393,30 @@ TEST(MemoryStore, SetsIfThePrefixMatches) {
   store.Set("e", "x", std::chrono::milliseconds(1));
   std::this_thread::sleep_for(std::chrono::milliseconds(5));
   EXPECT_FALSE(store.Get("e").has_value());
+}
+
+// Sets: members added and removed, expiry no sooner than the longest asked, values of many keys.
+TEST(MemoryStore, KeepsSets) {
+  MemoryStore store;
+  store.AddMember("s", "a", std::chrono::minutes(1));
+  store.AddMember("s", "b", std::chrono::milliseconds(1));  // does not shorten the set's life
+  store.AddMember("s", "a", std::chrono::minutes(1));
+  std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  std::vector<std::string> members = store.Members("s");
+  std::sort(members.begin(), members.end());
+  EXPECT_EQ(members, (std::vector<std::string>{"a", "b"}));
+  EXPECT_GT(*store.TimeToLive("s"), std::chrono::seconds(50));
+  store.RemoveMembers("s", {"a", "c"});
+  EXPECT_EQ(store.Members("s"), std::vector<std::string>{"b"});
+  store.RemoveMembers("s", {"b"});
+  EXPECT_FALSE(store.Exists("s"));
+  EXPECT_TRUE(store.Members("absent").empty());
+  EXPECT_FALSE(store.TimeToLive("absent").has_value());
+  store.Set("k", "v", std::chrono::minutes(1));
+  const auto values = store.GetMany({"k", "absent"});
+  ASSERT_EQ(values.size(), 2u);
+  EXPECT_EQ(values[0], std::optional<std::string>("v"));
+  EXPECT_FALSE(values[1].has_value());
 }
 
 }  // namespace

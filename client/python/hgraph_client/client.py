@@ -68,11 +68,23 @@ class HgraphError(Exception):
     and `retry_delay_s` (set when the same call is worth retrying after that long)."""
 
     def __init__(self, code: grpc.StatusCode, message: str,
-                 details: Optional[rich_status.ErrorDetails] = None):
+                 details: Optional[rich_status.ErrorDetails] = None, local: bool = False):
         super().__init__(f"{code.name}: {message}")
         self.code = code
         self.message = message
         self.details = details
+        # True when this client made the error itself (it stopped the call), not the server or
+        # the network.
+        self.local = local
+
+    @property
+    def transient(self) -> bool:
+        """Whether the same call is worth repeating as it is: the replica could not be reached
+        (UNAVAILABLE: it is restarting, or the balancer found none for a moment), or the call was
+        reset on its way (CANCELLED by a proxy, or by a replica shutting down, not by this
+        client)."""
+        return (self.code == grpc.StatusCode.UNAVAILABLE or
+                (self.code == grpc.StatusCode.CANCELLED and not self.local))
 
     @property
     def reason(self) -> Optional[str]:
@@ -282,7 +294,9 @@ class Client:
     the same name and repeats the call. Without a shared store, H-Graphs of the lost session are
     gone: a requery on one raises NOT_FOUND; merge again. With one (hgraph-server --store
     redis://...), another replica loads the session and its H-Graphs and no recovery is needed.
-    `retries=0` turns recovery off.
+    `retries=0` turns recovery off. Requery, get_session, get_hgraph, list_sessions and add_paths
+    with a request_id are repeated as they are after a transient error (UNAVAILABLE, or a reset
+    on the way: HgraphError.transient), as often and with the same backoff.
 
     Security: `tls_ca` (the PEM CA that signed the server's certificate; a path or the bytes)
     turns TLS on; without it but with a client certificate the system's roots are trusted.
@@ -324,18 +338,27 @@ class Client:
         self.retries = retries
         self.backoff_s = backoff_s
         self.recoveries = 0  # sessions re-created after a lost replica
+        self.repeats = 0  # calls repeated as they were after a transient error
         self._scene: Optional[tuple] = None  # (scene, base_dir) of the last upload_scene
 
     def _metadata(self, name: Optional[str] = None) -> tuple:
         return ((SESSION_METADATA, name or self.session or self.session_name),) + self._auth
 
     def _recovering(self, call: Callable[[], object], explicit_session: Optional[str]):
-        """Runs call(); on a recoverable error restores the current session and runs it again."""
+        """Runs call(); on a recoverable error restores the current session and runs it again;
+        after a call reset on its way (CANCELLED, HgraphError.transient) runs it again as it
+        is."""
         attempt = 0
         while True:
             try:
                 return call()
             except HgraphError as e:
+                if e.code == grpc.StatusCode.CANCELLED and e.transient and \
+                        attempt < self.retries:
+                    time.sleep(self.backoff_s * (2 ** attempt))
+                    attempt += 1
+                    self.repeats += 1
+                    continue
                 if (e.code not in RECOVERABLE or e.reason not in RECOVERABLE_REASONS or
                         attempt >= self.retries or
                         explicit_session not in (None, self.session) or self._scene is None or
@@ -348,6 +371,21 @@ class Client:
             except HgraphError as e:
                 if e.code not in RECOVERABLE or attempt >= self.retries:
                     raise
+
+    def _retrying(self, call: Callable[[], object]):
+        """Runs call(), a call safe to repeat; after a transient error (HgraphError.transient)
+        runs it again, with the same backoff and at most `retries` times. With a shared store
+        another replica then answers for the session and its H-Graphs."""
+        attempt = 0
+        while True:
+            try:
+                return call()
+            except HgraphError as e:
+                if not e.transient or attempt >= self.retries:
+                    raise
+            time.sleep(self.backoff_s * (2 ** attempt))
+            attempt += 1
+            self.repeats += 1
 
     def _restore_session(self) -> None:
         scene, base_dir = self._scene
@@ -455,35 +493,47 @@ class Client:
         return session
 
     def get_session(self, name: Optional[str] = None) -> service_pb2.Session:
-        try:
-            return self.stub.GetSession(service_pb2.GetSessionRequest(name=name or self.session),
-                                        metadata=self._metadata(name))
-        except grpc.RpcError as e:
-            _raise(e)
+        def call():
+            try:
+                return self.stub.GetSession(
+                    service_pb2.GetSessionRequest(name=name or self.session),
+                    metadata=self._metadata(name))
+            except grpc.RpcError as e:
+                _raise(e)
+
+        return self._retrying(call)
 
     def list_sessions(self, page_size: int = 0) -> list:
-        """This tenant's sessions on the replica that answers (every page of ListSessions)."""
+        """This tenant's sessions (every page of ListSessions): those of every replica when the
+        replicas share a store (--store redis://...), else those of the replica that answers."""
         out, token = [], ""
-        try:
-            while True:
-                page = self.stub.ListSessions(
+
+        def page_after(token):
+            try:
+                return self.stub.ListSessions(
                     service_pb2.ListSessionsRequest(page_size=page_size, page_token=token),
                     metadata=self._metadata())
-                out.extend(page.sessions)
-                token = page.next_page_token
-                if not token:
-                    return out
-        except grpc.RpcError as e:
-            _raise(e)
+            except grpc.RpcError as e:
+                _raise(e)
+
+        while True:
+            page = self._retrying(lambda: page_after(token))
+            out.extend(page.sessions)
+            token = page.next_page_token
+            if not token:
+                return out
 
     def get_hgraph(self, name: str) -> service_pb2.HGraph:
         """A kept H-Graph (GetHGraph): generation, inputs, size and the merge's result; state
         RUNNING while a merge with an hgraph_id still builds it."""
-        try:
-            return self.stub.GetHGraph(service_pb2.GetHGraphRequest(name=name),
-                                       metadata=self._metadata(name.split("/hgraphs/", 1)[0]))
-        except grpc.RpcError as e:
-            _raise(e)
+        def call():
+            try:
+                return self.stub.GetHGraph(service_pb2.GetHGraphRequest(name=name),
+                                           metadata=self._metadata(name.split("/hgraphs/", 1)[0]))
+            except grpc.RpcError as e:
+                _raise(e)
+
+        return self._retrying(call)
 
     def delete_hgraph(self, name: str) -> None:
         try:
@@ -636,7 +686,7 @@ class Client:
             if best is None:
                 raise HgraphError(grpc.StatusCode.CANCELLED,
                                   "stopped by on_progress before a path was streamed "
-                                  "(progress_paths)") from None
+                                  "(progress_paths)", local=True) from None
             return MergeOutcome(best, "", events, complete=False)
         except grpc.RpcError as e:
             if (best_so_far and best is not None and
@@ -658,14 +708,21 @@ class Client:
         """Searches a stored H-Graph under another measure, reusing its checked edges.
 
         `report_clearance` profiles the path's clearance under length for this query (None: as
-        the merge that built the H-Graph asked)."""
-        try:
-            return self.stub.Requery(service_pb2.RequeryRequest(
-                hgraph=hgraph, measure=make_measure(measure, k, safety),
-                report_clearance=report_clearance), timeout=timeout,
-                metadata=self._metadata(hgraph.split("/hgraphs/", 1)[0])).result
-        except grpc.RpcError as e:
-            _raise(e)
+        the merge that built the H-Graph asked). Repeated after a transient error
+        (HgraphError.transient), as `retries` says."""
+        request = service_pb2.RequeryRequest(
+            hgraph=hgraph, measure=make_measure(measure, k, safety),
+            report_clearance=report_clearance)
+
+        def call():
+            try:
+                return self.stub.Requery(
+                    request, timeout=timeout,
+                    metadata=self._metadata(hgraph.split("/hgraphs/", 1)[0])).result
+            except grpc.RpcError as e:
+                _raise(e)
+
+        return self._retrying(call)
 
     def add_paths(self, hgraph: str, paths, measure: Union[str, merge_pb2.Measure] = "length", *,
                   k: Optional[float] = None, safety: Optional[float] = None,
@@ -677,15 +734,23 @@ class Client:
         its new generation and the bridge candidates the new paths brought; `report_clearance`
         as in `requery`. With a `request_id` a repeat returns the first answer and adds
         nothing; with `expected_generation` the call adds only to that generation (ABORTED,
-        reason GENERATION_MISMATCH, otherwise)."""
-        try:
-            return self.stub.AddPaths(service_pb2.AddPathsRequest(
-                hgraph=hgraph, paths=make_paths(paths), measure=make_measure(measure, k, safety),
-                report_clearance=report_clearance, request_id=request_id,
-                expected_generation=expected_generation),
-                timeout=timeout, metadata=self._metadata(hgraph.split("/hgraphs/", 1)[0]))
-        except grpc.RpcError as e:
-            _raise(e)
+        reason GENERATION_MISMATCH, otherwise). With a `request_id` the call is repeated after a
+        transient error (HgraphError.transient), as `retries` says; without one never (it
+        could add the paths twice)."""
+        request = service_pb2.AddPathsRequest(
+            hgraph=hgraph, paths=make_paths(paths), measure=make_measure(measure, k, safety),
+            report_clearance=report_clearance, request_id=request_id,
+            expected_generation=expected_generation)
+
+        def call():
+            try:
+                return self.stub.AddPaths(
+                    request, timeout=timeout,
+                    metadata=self._metadata(hgraph.split("/hgraphs/", 1)[0]))
+            except grpc.RpcError as e:
+                _raise(e)
+
+        return self._retrying(call) if request_id else call()
 
     def check(self, paths, *, session: Optional[str] = None,
               resolution: Optional[float] = None, k: Optional[float] = None,
