@@ -116,10 +116,32 @@ PathQuality QualityAccumulator::Finish() const {
 
 namespace {
 
-// Integral of x^-k over [a, b], 0 < a <= b.
+// x^n, n >= 0 small, by multiplication.
+double NaturalPower(double x, int n) {
+  double r = 1;
+  for (int i = 0; i < n; ++i) r *= x;
+  return r;
+}
+
+// Integral of x^-k over [a, b], 0 < a <= b. For a whole k from 2 to 8 (3 by default: the lower
+// bound of every unchecked edge in every search takes a few of these) without pow:
+// (a^-m - b^-m) / m with m = k - 1, a^-m - b^-m = (b^m - a^m) / (a^m b^m), and b^m - a^m =
+// (b - a) times a sum of positive terms, which keeps its precision when a and b are close (a
+// difference of two pows loses it).
 double PowerIntegral(double a, double b, double k) {
   if (b <= a) return 0;
   if (k == 1) return std::log(b / a);
+  if (k >= 2 && k <= 8 && k == std::floor(k)) {
+    const int m = static_cast<int>(k) - 1;
+    double sum = 0;  // b^m - a^m = (b - a) * sum over i < m of b^i a^(m-1-i)
+    double b_power = 1;
+    for (int i = 0; i < m; ++i) {
+      sum += b_power * NaturalPower(a, m - 1 - i);
+      b_power *= b;
+    }
+    const double denominator = NaturalPower(a, m) * b_power * m;
+    if (std::isnormal(denominator) && std::isfinite(sum)) return (b - a) * sum / denominator;
+  }
   return (std::pow(b, 1 - k) - std::pow(a, 1 - k)) / (1 - k);
 }
 
