@@ -26,7 +26,7 @@ import grpc
 
 import hgraph_client
 
-from cluster import SKIP, Nginx, Replica, nginx_binary
+from cluster import SKIP, Nginx, Replica, missing_tools, print_failure_logs
 
 
 def main():
@@ -36,8 +36,9 @@ def main():
     parser.add_argument("--deploy", required=True, type=pathlib.Path)
     parser.add_argument("--data", required=True, type=pathlib.Path)
     args = parser.parse_args()
-    if nginx_binary() is None:
-        print("SKIP: nginx is not installed (scripts/install-deps.sh installs it)")
+    missing = missing_tools(need_redis=False)
+    if missing:
+        print(missing)
         return SKIP
 
     scene = args.data / "circles" / "scene.json"
@@ -151,10 +152,7 @@ def main():
         for r in replicas:
             r.stop()
         if failures:
-            for r in replicas:
-                print(r.report())
-            if nginx is not None:
-                print("--- nginx error.log\n" + nginx.error_log())
+            print_failure_logs(replicas, nginx)
         shutil.rmtree(work, ignore_errors=True)
     print(f"{len(failures)} problems")
     return 1 if failures else 0

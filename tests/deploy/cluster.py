@@ -39,6 +39,23 @@ def redis_binary():
     return shutil.which("redis-server")
 
 
+def missing_tools(need_redis):
+    """The SKIP line for a tool the test needs and this machine lacks, or None."""
+    needed = [("nginx", nginx_binary)] + ([("redis-server", redis_binary)] if need_redis else [])
+    for name, find in needed:
+        if find() is None:
+            return f"SKIP: {name} is not installed (scripts/install-deps.sh installs it)"
+    return None
+
+
+def print_failure_logs(replicas, nginx, lines=30):
+    """Each replica's last `lines` log lines and nginx's error log (when it started)."""
+    for r in replicas:
+        print(r.report(lines))
+    if nginx is not None:
+        print("--- nginx error.log\n" + nginx.error_log())
+
+
 class Replica(ServerProcess):
     """One hgraph-server on 127.0.0.1:<port> (a free port chosen now unless `port` is given),
     one worker thread, no metrics listener, a short shutdown (`--drain-s 0 --grace-s 2`), and

@@ -22,7 +22,7 @@ import tempfile
 
 import hgraph_client
 
-from cluster import SKIP, Nginx, Replica, nginx_binary, redis_binary
+from cluster import SKIP, Nginx, Replica, missing_tools, print_failure_logs
 from redis_process import Redis
 
 
@@ -32,11 +32,9 @@ def main():
     parser.add_argument("--deploy", required=True, type=pathlib.Path)
     parser.add_argument("--data", required=True, type=pathlib.Path)
     args = parser.parse_args()
-    if nginx_binary() is None:
-        print("SKIP: nginx is not installed (scripts/install-deps.sh installs it)")
-        return SKIP
-    if redis_binary() is None:
-        print("SKIP: redis-server is not installed (scripts/install-deps.sh installs it)")
+    missing = missing_tools(need_redis=True)
+    if missing:
+        print(missing)
         return SKIP
 
     scene = args.data / "circles" / "scene.json"
@@ -112,10 +110,7 @@ def main():
                 r.stop()
         redis.stop()
         if failures:
-            for r in replicas:
-                print(r.report())
-            if nginx is not None:
-                print("--- nginx error.log\n" + nginx.error_log())
+            print_failure_logs(replicas, nginx)
         shutil.rmtree(work, ignore_errors=True)
     print(f"{len(failures)} problems")
     return 1 if failures else 0
