@@ -16,6 +16,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/collision/free_motion.h"
 #include "core/common/error.h"
 
 namespace hgraph {
@@ -255,6 +256,10 @@ const std::vector<std::pair<int, int>>& CollisionWorld::SelfPairs() const {
   return impl_->self_pairs;
 }
 
+bool CollisionWorld::CanAdvance() const {
+  return impl_->meshes_only && impl_->self_pairs.empty() && !impl_->body_prototypes.empty();
+}
+
 size_t CollisionWorld::memory_bytes() const { return impl_->memory_bytes; }
 
 struct CollisionContext::Impl {
@@ -404,6 +409,49 @@ double CollisionContext::ClearanceLowerBound(const Config& q, double rel_err, do
     if (data.min_distance <= 0) return 0.0;
   }
   return std::min(cap, data.min_distance / scale);
+}
+
+namespace {
+
+// Below this angle the turn's axis is not trusted: the turn is bounded by the distance from the
+// frame's origin instead.
+constexpr double kAxisMinAngle = 1e-4;
+
+const free_motion::MeshModel& MeshOf(const fcl::CollisionObjectd& object) {
+  return static_cast<const free_motion::MeshModel&>(*object.collisionGeometry());
+}
+
+}  // namespace
+
+double CollisionContext::FreeFraction(const Config& q, const Config& to, double limit) {
+  HGRAPH_CHECK(world_.CanAdvance() && limit >= 0);
+  ++distance_queries_;
+  const Space& space = world_.space();
+  if (!space.InBounds(q)) return 0.0;
+  const CollisionWorld::Impl& w = world_.impl();
+  double best = limit;
+  for (size_t i = 0; i < impl_->bodies.size() && best > 0; ++i) {
+    const int c = w.body_component[i];
+    const Space::FrameMotion motion = space.Motion(c, q, to);
+    // The motion in the body's mesh frame at q (the component's frame moved by the offset).
+    const Eigen::Isometry3d& offset = w.body_offset[i];
+    const Eigen::Matrix3d back = offset.linear().transpose();
+    free_motion::Screw screw;
+    screw.translation = back * motion.translation;
+    screw.axis = back * motion.axis;
+    screw.center = -(back * offset.translation());
+    screw.angle = motion.angle;
+    screw.radial = motion.angle < kAxisMinAngle;
+    const free_motion::MeshModel& mesh = MeshOf(*w.body_prototypes[i]);
+    const double reach = free_motion::MeshReach(mesh, screw);
+    const Eigen::Isometry3d to_mesh = (space.Pose(c, q) * offset).inverse();
+    for (const auto& obstacle : w.obstacles) {
+      best = free_motion::AdvanceBound(mesh, screw, reach, MeshOf(*obstacle),
+                                       to_mesh * obstacle->getTransform(), best);
+      if (best <= 0) break;
+    }
+  }
+  return best;
 }
 
 double CollisionContext::ObstacleDistance(const Eigen::Vector3d& point) {

@@ -48,6 +48,10 @@ class CollisionWorld {
   // driven by different components), i < j.
   const std::vector<std::pair<int, int>>& SelfPairs() const;
 
+  // True when CollisionContext::FreeFraction can answer: the robot's bodies and the obstacles
+  // are all meshes, and no pair of bodies counts towards clearance.
+  bool CanAdvance() const;
+
   // Approximate memory held by the geometry, in bytes (for cache budgets).
   size_t memory_bytes() const;
 
@@ -99,6 +103,16 @@ class CollisionContext {
   // scene the hint is ignored, since GJK's nearest points are not exact. cap > 0 (may be
   // infinite). Counts one distance query.
   double ClearanceFrom(const Config& q, double cap, ClearanceWitness* hint);
+
+  // How far the straight motion from q towards `to` (Space::Interpolate) is certainly free: a
+  // fraction s in [0, limit] such that no robot body touches an obstacle anywhere on the
+  // parameters [0, s) of the motion (limit may exceed 1: the motion goes on past `to` at the same
+  // rate). Found by direction-aware conservative advancement (free_motion.h): a motion that
+  // slides along an obstacle or leaves it goes as far as it is free, where a bound by how far
+  // any robot point moves would stop it at the clearance. 0 when a body touches an obstacle at q
+  // or q is out of bounds; limit when nothing is found before it. Only where
+  // world.CanAdvance(); limit >= 0. Counts one distance query.
+  double FreeFraction(const Config& q, const Config& to, double limit);
 
   // Distance from a world point to the nearest obstacle (mesh surfaces, solid primitives; 0 on or
   // inside a primitive); +infinity without obstacles. The robot plays no part, and no query is

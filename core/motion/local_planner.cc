@@ -311,6 +311,29 @@ class EdgeCheck {
     return Advanced{.certified = true};
   }
 
+  // Conservative advancement along the separating directions (LocalPlannerOptions::
+  // direction_bound): from each sample the rest of the motion is free for the fraction
+  // FreeFraction finds, and the next sample goes just short of its end. It continues a little
+  // past `to`, so that a certificate covers the end state too.
+  Advanced AdvanceByDirection(int segments) {
+    const double finest =
+        1.0 / (static_cast<double>(segments) * (1 << LocalPlanner::kMaxRefineDepth));
+    constexpr double kMargin = 0.999;
+    constexpr double kPastEnd = 1.001;
+    double t = 0;
+    Config q = from_;
+    while (true) {
+      Tick();
+      const double s = context_.FreeFraction(q, to_, kPastEnd);
+      if (s > 1) return Advanced{.certified = true};
+      if (s <= 0 && t == 0) return Advanced{.invalid_at = 0.0};
+      const double step = kMargin * s * (1 - t);
+      if (step < finest) return Advanced{};
+      t += step;
+      q = At(t);
+    }
+  }
+
   // The clearance profile: a distance query at each point of the resolution's grid (or its
   // clearance from `known`, sorted by t, may be null), then every stretch between two refined
   // (Refine) into `profile`. False (invalid_at set) if a point is in contact.
@@ -471,7 +494,9 @@ EdgeReport LocalPlanner::CheckEdge(const EdgeCheckRequest& request) const {
                       options_.clearance_bound.get(), &impl_->bound_queries,
                       options_.certificate_rel_err, options_.certificate_threshold,
                       options_.warm_start);
-    const EdgeCheck::Advanced advanced = advance.Advance(segments);
+    const EdgeCheck::Advanced advanced = options_.direction_bound && world_->CanAdvance()
+                                             ? advance.AdvanceByDirection(segments)
+                                             : advance.Advance(segments);
     if (advanced.invalid_at >= 0) return invalid(advanced.invalid_at);
     if (advanced.certified) {
       report.certified = true;

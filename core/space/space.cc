@@ -178,6 +178,31 @@ double Space::RotationAngle(int i, const Config& a, const Config& b) const {
   return 2.0 * std::acos(QuaternionDot(a, b, at));
 }
 
+Space::FrameMotion Space::Motion(int i, const Config& a, const Config& b) const {
+  FrameMotion motion;
+  const Eigen::Isometry3d from = Pose(i, a);
+  motion.translation = from.linear().transpose() * (Pose(i, b).translation() - from.translation());
+  const ComponentType type = components_[i].type;
+  const int r = RotationOffset(type);
+  if (r < 0) return motion;
+  const int at = offsets_[i] + r;
+  if (IsSO2Like(type)) {
+    const double turn = WrapAngle(b[at] - a[at]);
+    motion.angle = std::abs(turn);
+    if (turn < 0) motion.axis = -Eigen::Vector3d::UnitZ();
+    return motion;
+  }
+  // Slerp from qa towards qb, or -qb when that is the shorter arc: qa * relative^t.
+  const Eigen::Quaterniond qa = QuaternionAt(a, at).normalized();
+  Eigen::Quaterniond qb = QuaternionAt(b, at).normalized();
+  if (qa.dot(qb) < 0) qb.coeffs() = -qb.coeffs();
+  const Eigen::Quaterniond relative = qa.conjugate() * qb;
+  const double sine = relative.vec().norm();
+  motion.angle = 2 * std::atan2(sine, std::abs(relative.w()));
+  if (sine > 0) motion.axis = (relative.w() < 0 ? -1.0 : 1.0) * relative.vec() / sine;
+  return motion;
+}
+
 double Space::ComponentDistance(int i, const Config& a, const Config& b) const {
   const ComponentSpec& c = components_[i];
   double d = c.translation_weight * TranslationDistance(i, a, b);

@@ -80,6 +80,19 @@ class Space {
   double TranslationDistance(int i, const Config& a, const Config& b) const;
   double RotationAngle(int i, const Config& a, const Config& b) const;
 
+  // The straight motion from a to b of the frame of a body driven by component i (Pose): at
+  // parameter t of Interpolate, a point p of the body, in the frame's coordinates at a, is at
+  //   t * translation + AngleAxis(t * angle, axis) * p
+  // up to rounding (Eigen's slerp turns at a steady rate about one axis fixed in the frame; 2D
+  // components turn about z). angle in [0, pi] (RotationAngle); axis a unit vector, z when the
+  // frame does not turn.
+  struct FrameMotion {
+    Eigen::Vector3d translation = Eigen::Vector3d::Zero();
+    Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();
+    double angle = 0;
+  };
+  FrameMotion Motion(int i, const Config& a, const Config& b) const;
+
   // A run of coordinates that moves on its own: a component's translation or its rotation.
   struct Part {
     int offset = 0;  // first coordinate

@@ -92,6 +92,8 @@ struct Problem {
   std::unique_ptr<LocalPlanner> unbounded_planner;
   // Every distance query started afresh (warm_start off).
   std::unique_ptr<LocalPlanner> cold_planner;
+  // Certificates by direction-aware advancement (direction_bound on).
+  std::unique_ptr<LocalPlanner> direction_planner;
   double resolution = 0.01;
   std::vector<InputPath> inputs;
   std::vector<double> input_lengths;
@@ -124,6 +126,7 @@ struct Method {
   double rel_err = 0;            // > 0: runs on Problem::rel_planners[rel_err]
   bool unbounded = false;        // runs on Problem::unbounded_planner
   bool cold = false;             // runs on Problem::cold_planner
+  bool direction = false;        // runs on Problem::direction_planner
   // Runs after the others, given Problem::equal_time_ms as its whole engine budget.
   bool equal_time = false;
   // OMPL's pipeline as OMPL ships it (its DiscreteMotionValidator): the name of the certified
@@ -229,6 +232,7 @@ Run RunOnce(const Method& m, const Problem& p, double k) {
                                 : m.rel_err > 0   ? *p.rel_planners.at(m.rel_err)
                                 : m.unbounded     ? *p.unbounded_planner
                                 : m.cold          ? *p.cold_planner
+                                : m.direction     ? *p.direction_planner
                                                   : *p.planner;
   CountingChecker counter(planner);
   const int64_t cc0 = planner.total_collision_checks();
@@ -364,6 +368,11 @@ std::vector<Method> Methods(const Problem& p, bool inverse_clearance_pair, uint6
       HgraphMethod("hgraph-cold-queries", "hgraph defaults, queries without warm start", {}, {});
   cold.cold = true;
   m.push_back(std::move(cold));
+  Method direction =
+      HgraphMethod("hgraph-direction-bound",
+                   "hgraph defaults, certificates along separating directions", {}, {});
+  direction.direction = true;
+  m.push_back(std::move(direction));
   // The defaults with the post-optimization's searches profiling motions whose certificate
   // stalls, as the first search does: what refusing them gains and costs.
   m.push_back(HgraphMethod("hgraph-profiled-stalls",
@@ -467,6 +476,8 @@ Problem LoadProblem(const std::string& name, const std::string& file, const fs::
       p.world, LocalPlannerOptions{.resolution = p.resolution, .clearance_bound = bound});
   p.unbounded_planner = std::make_unique<LocalPlanner>(
       p.world, LocalPlannerOptions{.resolution = p.resolution, .certificate_threshold = false});
+  p.direction_planner = std::make_unique<LocalPlanner>(
+      p.world, LocalPlannerOptions{.resolution = p.resolution, .direction_bound = true});
   p.cold_planner = std::make_unique<LocalPlanner>(
       p.world, LocalPlannerOptions{.resolution = p.resolution, .warm_start = false});
   for (double rel : kCertificateRelErrs) {

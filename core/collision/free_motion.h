@@ -1,0 +1,54 @@
+// Direction-aware conservative advancement of a rigid mesh along a straight motion against a
+// static mesh: how far the motion is certainly free of contact. Internal to core/collision (it
+// reads FCL's bounding-volume trees); CollisionContext::FreeFraction is the public face.
+//
+// The motion is a screw: in the moving mesh's frame at s = 0, a point m is at
+//   Screw::At(m, s) = center + AngleAxis(s * angle, axis) * (m - center) + s * translation.
+// Its velocity is translation + angle * axis x (the point's offset from the axis line, turned), so
+// along a fixed unit vector n a point that starts at distance rho from the axis line moves at most
+//   s * (translation . n + angle * rho)
+// over s. Two convex sets whose nearest points are P (moving) and Q (static) lie on either side of
+// the planes through P and Q normal to n = (Q - P) / |Q - P|: the moving set cannot reach the
+// static one before that bound reaches |Q - P|. Bounding volumes give such a lower bound for every
+// pair of triangles beneath them, with rho bounded over the volume; pairs of triangles advance by
+// it repeatedly, from their exact places at each step. Unlike a bound by how far any point moves
+// (|translation| + angle * radius), a motion that slides along an obstacle, or away from it, is
+// not held back by it.
+#pragma once
+
+#include <fcl/geometry/bvh/BVH_model.h>
+#include <fcl/math/bv/OBBRSS.h>
+
+#include <Eigen/Geometry>
+
+namespace hgraph::free_motion {
+
+using MeshModel = fcl::BVHModel<fcl::OBBRSSd>;
+
+struct Screw {
+  Eigen::Vector3d translation = Eigen::Vector3d::Zero();
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();  // unit
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();
+  double angle = 0;  // >= 0
+  // Bound the turn's reach by the distance from `center` rather than from the axis line: for
+  // turns too small for the axis to be known well.
+  bool radial = false;
+
+  Eigen::Vector3d At(const Eigen::Vector3d& m, double s) const;
+  // How far the point m (at s = 0) is from what the turn moves it about: the axis line, or the
+  // center when radial.
+  double Reach(const Eigen::Vector3d& m) const;
+};
+
+// The largest Reach over the mesh's vertices.
+double MeshReach(const MeshModel& mesh, const Screw& screw);
+
+// The moving mesh (`reach` its MeshReach) against the static mesh placed at `obstacle_pose` in
+// the moving mesh's frame at s = 0: a fraction s in [0, limit] such that no triangle of the one
+// touches a triangle of the other for any parameter in [0, s); 0 when they touch at s = 0, limit
+// when nothing is found before it. limit >= 0.
+double AdvanceBound(const MeshModel& mesh, const Screw& screw, double reach,
+                    const MeshModel& obstacle, const Eigen::Isometry3d& obstacle_pose,
+                    double limit);
+
+}  // namespace hgraph::free_motion

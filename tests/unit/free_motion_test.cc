@@ -1,0 +1,286 @@
+// Direction-aware conservative advancement (CollisionContext::FreeFraction,
+// LocalPlannerOptions::direction_bound) with real FCL on real meshes: what it calls free is free
+// (exact clearances along the motion), it never stops short of the bound by how far any point
+// moves, it lets a motion slide along a wall, and what the local planner certifies with it has an
+// exact certified profile.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <limits>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "core/adapter/path_io.h"
+#include "core/adapter/scene_proto.h"
+#include "core/collision/collision_world.h"
+#include "core/merge/merge.h"
+#include "core/merge/path_check.h"
+#include "core/motion/local_planner.h"
+#include "core/path/path.h"
+
+namespace hgraph {
+namespace {
+
+const std::string kRoot = HGRAPH_SOURCE_DIR;
+
+struct MeshProblem {
+  std::string name;
+  std::string file;
+};
+
+// SE(2) and SE(3), from a few dozen triangles to real size; double_wrench checks its two bodies
+// against each other, which FreeFraction does not cover.
+std::vector<MeshProblem> MeshProblems() {
+  return {{"hole_wall", kRoot + "/tests/bench/scenes/hole_wall/scene.json"},
+          {"double_wrench", kRoot + "/scenes/double_wrench/scene.json"},
+          {"car_planar", kRoot + "/tests/data/ompl_app_car/car_planar.cfg"},
+          {"home", kRoot + "/tests/bench/scenes/home/scene.json"},
+          {"car_maze", kRoot + "/tests/bench/scenes/car_maze/scene.json"}};
+}
+
+std::shared_ptr<const CollisionWorld> LoadWorld(const MeshProblem& p) {
+  return std::make_shared<const CollisionWorld>(LoadSceneFile(p.file));
+}
+
+// A box mesh centred on the origin.
+std::shared_ptr<const Mesh> BoxMesh(const Eigen::Vector3d& size) {
+  auto mesh = std::make_shared<Mesh>();
+  for (int i = 0; i < 8; ++i) {
+    mesh->vertices.push_back(
+        Eigen::Vector3d(i & 1 ? 0.5 : -0.5, i & 2 ? 0.5 : -0.5, i & 4 ? 0.5 : -0.5)
+            .cwiseProduct(size));
+  }
+  const int quads[6][4] = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4},
+                           {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}};
+  for (const auto& q : quads) {
+    mesh->triangles.emplace_back(q[0], q[1], q[2]);
+    mesh->triangles.emplace_back(q[0], q[2], q[3]);
+  }
+  return mesh;
+}
+
+Config Se3(double x, double y, double z, double yaw = 0) {
+  const Eigen::Quaterniond r(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()));
+  Config q(7);
+  q << x, y, z, r.x(), r.y(), r.z(), r.w();
+  return q;
+}
+
+// A unit cube robot beside a wall 20 long and 0.2 thick in the plane y = 0.
+std::shared_ptr<const CollisionWorld> WallWorld() {
+  auto scene = std::make_shared<Scene>(Scene{
+      .space = Space::SE3(Eigen::Vector3d::Constant(-10), Eigen::Vector3d::Constant(10)),
+  });
+  scene->obstacles.push_back(Obstacle{
+      .name = "wall",
+      .shape = Shape{.type = ShapeType::kMesh, .mesh = BoxMesh({20, 0.2, 20}), .source = "test"}});
+  scene->robot.push_back(RobotBody{
+      .name = "cube",
+      .shape = Shape{.type = ShapeType::kMesh, .mesh = BoxMesh({1, 1, 1}), .source = "test"}});
+  return std::make_shared<const CollisionWorld>(scene);
+}
+
+// Space::Motion describes Interpolate: the frame at t is the frame at a moved by t * translation
+// and turned by t * angle about the axis.
+TEST(FreeMotionTest, FrameMotionDescribesInterpolation) {
+  for (const MeshProblem& p : MeshProblems()) {
+    SCOPED_TRACE(p.name);
+    const auto world = LoadWorld(p);
+    const Space& space = world->space();
+    std::mt19937_64 rng(3);
+    for (int i = 0; i < 200; ++i) {
+      const Config a = space.Sample(rng);
+      const Config b = space.Interpolate(a, space.Sample(rng), i % 2 ? 0.05 : 1.0);
+      const double t = std::uniform_real_distribution<double>(0, 1)(rng);
+      const Config q = space.Interpolate(a, b, t);
+      for (int c = 0; c < space.num_components(); ++c) {
+        if (!space.CanDriveBody(c)) continue;
+        const Space::FrameMotion motion = space.Motion(c, a, b);
+        EXPECT_NEAR(motion.angle, space.RotationAngle(c, a, b), 1e-9);
+        EXPECT_NEAR(motion.axis.norm(), 1.0, 1e-12);
+        Eigen::Isometry3d moved = Eigen::Isometry3d::Identity();
+        moved.translation() = t * motion.translation;
+        moved.linear() = Eigen::AngleAxisd(t * motion.angle, motion.axis).toRotationMatrix();
+        const Eigen::Isometry3d want = space.Pose(c, a) * moved;
+        const Eigen::Isometry3d got = space.Pose(c, q);
+        EXPECT_LT((want.linear() - got.linear()).norm(), 1e-9) << "motion " << i;
+        EXPECT_LT((want.translation() - got.translation()).norm(),
+                  1e-9 * (1 + got.translation().norm()))
+            << "motion " << i;
+      }
+    }
+  }
+}
+
+// What FreeFraction calls free is free: exact clearance above 0 all along [0, s), sampled evenly
+// and ever closer to s; and s is never below the bound by how far any point moves,
+// clearance / MotionBound (one-sided advancement from the start).
+TEST(FreeMotionTest, WhatItCallsFreeIsFree) {
+  for (const MeshProblem& p : MeshProblems()) {
+    SCOPED_TRACE(p.name);
+    const auto world = LoadWorld(p);
+    if (!world->CanAdvance()) {
+      EXPECT_FALSE(world->SelfPairs().empty());
+      continue;
+    }
+    const Space& space = world->space();
+    const LocalPlanner planner(world);
+    auto context = world->MakeContext();
+    auto exact = world->MakeContext();
+    std::mt19937_64 rng(5);
+    int motions = 0;
+    int past_classic = 0;  // motions where s is over twice the classic bound
+    int whole = 0;
+    std::vector<double> gains;
+    while (motions < 60) {
+      const Config q = space.Sample(rng);
+      const double clearance = exact->Clearance(q);
+      if (clearance <= 0) continue;
+      const Config to = space.Interpolate(q, space.Sample(rng), motions % 3 == 0 ? 1.0 : 0.05);
+      const double s = context->FreeFraction(q, to, 1.0);
+      ASSERT_GT(s, 0) << "motion " << motions;
+      ASSERT_LE(s, 1.0);
+      const double classic = std::min(1.0, clearance / planner.MotionBound(q, to));
+      EXPECT_GE(s, 0.99 * classic) << "motion " << motions;
+      std::vector<double> ts;
+      for (int k = 0; k < 100; ++k) ts.push_back(s * k / 100.0);
+      for (int j = 1; j <= 8; ++j) ts.push_back(s * (1 - std::pow(10.0, -j)));
+      for (double t : ts) {
+        ASSERT_GT(exact->Clearance(space.Interpolate(q, to, t)), 0)
+            << "motion " << motions << " at " << t << " of " << s;
+      }
+      past_classic += s > 2 * classic;
+      whole += s == 1.0;
+      gains.push_back(s / classic);
+      ++motions;
+    }
+    EXPECT_EQ(context->distance_queries(), motions);
+    std::sort(gains.begin(), gains.end());
+    std::printf(
+        "%s: %d of %d motions free over twice the classic bound, %d whole; median gain %.2f\n",
+        p.name.c_str(), past_classic, motions, whole, gains[gains.size() / 2]);
+  }
+}
+
+// In contact at the start: 0. Out of bounds: 0.
+TEST(FreeMotionTest, ContactAtTheStartIsZero) {
+  const auto world = WallWorld();
+  auto context = world->MakeContext();
+  EXPECT_EQ(context->FreeFraction(Se3(0, 0.3, 0), Se3(5, 5, 0), 1.0), 0.0);
+  EXPECT_EQ(context->FreeFraction(Se3(0, 5, 11), Se3(0, 5, 0), 1.0), 0.0);
+  EXPECT_EQ(context->distance_queries(), 2);
+}
+
+// A cube sliding along a wall 0.05 away is free the whole way, where the bound by how far any
+// point moves allows 0.5 % of it per sample; moving away is free too; moving into the wall stops
+// where its face meets the wall, and turning on the spot beside it is free as far as the corners
+// stay clear.
+TEST(FreeMotionTest, SlidingAlongAWallIsFree) {
+  const auto world = WallWorld();
+  auto context = world->MakeContext();
+  const LocalPlanner planner(world);
+  const Config start = Se3(-5, 0.65, 0);
+  const Config along = Se3(5, 0.65, 0);
+  EXPECT_LT(planner.Clearance(start) / planner.MotionBound(start, along), 0.01);
+  EXPECT_EQ(context->FreeFraction(start, along, 1.0), 1.0);
+  EXPECT_EQ(context->FreeFraction(start, Se3(5, 5, 3), 1.0), 1.0);
+  // The face at y - 0.5 meets the wall's at 0.1: y = 0.6, a fraction 0.05 / 4 of the way.
+  const double into = context->FreeFraction(start, Se3(-5, -3.35, 0), 1.0);
+  EXPECT_LE(into, 0.0125 + 1e-12);
+  EXPECT_GE(into, 0.0125 * (1 - 1e-6));
+  // Turned by phi about z, the corner nearest the wall comes within 0.65 - (cos phi + sin phi) / 2
+  // of its axis; it reaches y = 0.1 when sin(phi + pi / 4) = 0.55 / (0.5 sqrt 2).
+  const double phi = std::asin(0.55 / (0.5 * std::sqrt(2.0))) - M_PI / 4;
+  const double turn = context->FreeFraction(start, Se3(-5, 0.65, 0, 1.0), 1.0);
+  EXPECT_LE(turn, phi + 1e-9);
+  EXPECT_GT(turn, 0.5 * phi);
+
+  // The local planner certifies the slide in a query or two with the direction bound, where
+  // two-sided advancement on clearances needs a hundred.
+  const LocalPlanner direction(world, {.direction_bound = true});
+  const EdgeCheckRequest request{.from = &start, .to = &along, .proof = EdgeProof::kCertificate};
+  const EdgeReport with = direction.CheckEdge(request);
+  const EdgeReport without = planner.CheckEdge(request);
+  EXPECT_TRUE(with.certified);
+  EXPECT_TRUE(without.certified);
+  EXPECT_LE(with.distance_queries, 2);
+  EXPECT_GT(without.distance_queries, 50);
+}
+
+// What the local planner certifies with the direction bound has an exact certified profile, and
+// a motion it finds in collision collides; on the whole it certifies what advancement on
+// clearances does, with fewer queries.
+TEST(FreeMotionTest, DirectionCertificatesAreExactCertificates) {
+  for (const MeshProblem& p : MeshProblems()) {
+    SCOPED_TRACE(p.name);
+    const auto world = LoadWorld(p);
+    const LocalPlanner classic(world);
+    const LocalPlanner direction(world, {.direction_bound = true});
+    std::mt19937_64 rng(11);
+    std::vector<Config> free;
+    while (free.size() < 60) {
+      const Config q = world->space().Sample(rng);
+      if (classic.Clearance(q) > 0) free.push_back(q);
+    }
+    int certified = 0;
+    int certified_classic = 0;
+    int64_t queries = 0;
+    int64_t queries_classic = 0;
+    for (size_t i = 0; i + 1 < free.size(); ++i) {
+      const Config to = world->space().Interpolate(free[i], free[i + 1], i % 2 ? 0.1 : 1.0);
+      for (const EdgeProof mode : {EdgeProof::kCertificate, EdgeProof::kCertificateOrGiveUp}) {
+        const EdgeCheckRequest request{.from = &free[i], .to = &to, .proof = mode};
+        const EdgeReport with = direction.CheckEdge(request);
+        const EdgeReport without = classic.CheckEdge(request);
+        const EdgeReport profile =
+            classic.CheckEdge({.from = &free[i], .to = &to, .proof = EdgeProof::kProfile});
+        if (with.state == EdgeState::kInvalid) {
+          EXPECT_EQ(profile.state, EdgeState::kInvalid) << "motion " << i;
+        }
+        if (with.certified) {
+          ++certified;
+          EXPECT_EQ(with.state, EdgeState::kValid);
+          EXPECT_TRUE(profile.certified) << "motion " << i;
+        }
+        certified_classic += without.certified;
+        queries += with.distance_queries;
+        queries_classic += without.distance_queries;
+      }
+    }
+    EXPECT_GT(certified, 5);
+    EXPECT_GE(certified, certified_classic * 9 / 10);
+    std::printf(
+        "%s: %d certified with the direction bound (%lld queries), %d on clearances (%lld)\n",
+        p.name.c_str(), certified, static_cast<long long>(queries), certified_classic,
+        static_cast<long long>(queries_classic));
+  }
+}
+
+// A default merge of the bench's fixed home inputs with the direction bound: its path passes
+// CheckPaths on the exact checker, certified, keeps the endpoints and is no longer than the
+// best input.
+TEST(FreeMotionTest, MergedPathsWithTheDirectionBoundAreCertifiedExactly) {
+  const MeshProblem p = MeshProblems()[3];
+  const auto world = LoadWorld(p);
+  const LocalPlanner exact(world);
+  const LocalPlanner direction(world, {.direction_bound = true});
+  const std::vector<InputPath> inputs =
+      LoadPathsFile(kRoot + "/tests/bench/results/real/inputs/home.json", world->space());
+  const MergeResult merged = Merge(direction, MergeRequest{.paths = inputs});
+  const PathCheckResult check = CheckPaths(exact, PathCheckRequest{.paths = {merged.path}});
+  ASSERT_EQ(check.paths.size(), 1u);
+  EXPECT_TRUE(check.paths[0].valid) << check.paths[0].invalid_reason;
+  EXPECT_TRUE(check.paths[0].certified);
+  EXPECT_EQ(merged.path.waypoints.front(), inputs[0].waypoints.front());
+  EXPECT_EQ(merged.path.waypoints.back(), inputs[0].waypoints.back());
+  double best_input = std::numeric_limits<double>::infinity();
+  for (const InputPath& input : inputs) {
+    best_input = std::min(best_input, PathLength(world->space(), input));
+  }
+  EXPECT_LE(merged.quality.length, best_input);
+}
+
+}  // namespace
+}  // namespace hgraph
