@@ -262,6 +262,25 @@ bool CollisionWorld::CanAdvance() const {
 
 size_t CollisionWorld::memory_bytes() const { return impl_->memory_bytes; }
 
+namespace {
+
+// A body's motion for FreeFraction: a screw in its mesh frame at the start, the screw's reach
+// over the mesh, and the map from world to that frame.
+struct BodyMotion {
+  free_motion::Screw screw;
+  double reach = 0;
+  Eigen::Isometry3d to_mesh;
+};
+
+// The body, obstacle and pair of triangles that bounded the last FreeFraction.
+struct AdvanceHint {
+  int body = -1;
+  int obstacle = -1;
+  free_motion::TrianglePair pair;
+};
+
+}  // namespace
+
 struct CollisionContext::Impl {
   std::vector<std::unique_ptr<fcl::CollisionObjectd>> bodies;
   CollideData collide;
@@ -269,6 +288,9 @@ struct CollisionContext::Impl {
   // A point (a sphere of radius 0, which FCL measures analytically against triangles and
   // primitives) for ObstacleDistance; its own geometry, so no other thread's object shares it.
   std::unique_ptr<fcl::CollisionObjectd> point;
+  // FreeFraction's per-body motions, kept to reuse their storage.
+  std::vector<BodyMotion> motions;
+  AdvanceHint advance_hint;
 };
 
 CollisionContext::CollisionContext(const CollisionWorld& world)
@@ -429,26 +451,43 @@ double CollisionContext::FreeFraction(const Config& q, const Config& to, double 
   const Space& space = world_.space();
   if (!space.InBounds(q)) return 0.0;
   const CollisionWorld::Impl& w = world_.impl();
-  double best = limit;
-  for (size_t i = 0; i < impl_->bodies.size() && best > 0; ++i) {
+  // Each body's motion in its mesh frame at q (the component's frame moved by the offset).
+  const int bodies = static_cast<int>(impl_->bodies.size());
+  std::vector<BodyMotion>& motions = impl_->motions;
+  motions.resize(bodies);
+  for (int i = 0; i < bodies; ++i) {
     const int c = w.body_component[i];
     const Space::FrameMotion motion = space.Motion(c, q, to);
-    // The motion in the body's mesh frame at q (the component's frame moved by the offset).
     const Eigen::Isometry3d& offset = w.body_offset[i];
     const Eigen::Matrix3d back = offset.linear().transpose();
-    free_motion::Screw screw;
+    free_motion::Screw& screw = motions[i].screw;
     screw.translation = back * motion.translation;
     screw.axis = back * motion.axis;
     screw.center = -(back * offset.translation());
     screw.angle = motion.angle;
     screw.radial = motion.angle < kAxisMinAngle;
+    motions[i].reach = free_motion::MeshReach(MeshOf(*w.body_prototypes[i]), screw);
+    motions[i].to_mesh = (space.Pose(c, q) * offset).inverse();
+  }
+  const auto obstacle_pose = [&](int i, int k) {
+    return motions[i].to_mesh * w.obstacles[k]->getTransform();
+  };
+  // The pair that bounded the last query first: the traversals below then prune from its bound.
+  double best = limit;
+  AdvanceHint& hint = impl_->advance_hint;
+  if (hint.body >= 0 && hint.body < bodies &&
+      hint.obstacle < static_cast<int>(w.obstacles.size())) {
+    best = free_motion::PairBound(MeshOf(*w.body_prototypes[hint.body]), motions[hint.body].screw,
+                                  MeshOf(*w.obstacles[hint.obstacle]),
+                                  obstacle_pose(hint.body, hint.obstacle), hint.pair, best);
+  }
+  for (int i = 0; i < bodies && best > 0; ++i) {
     const free_motion::MeshModel& mesh = MeshOf(*w.body_prototypes[i]);
-    const double reach = free_motion::MeshReach(mesh, screw);
-    const Eigen::Isometry3d to_mesh = (space.Pose(c, q) * offset).inverse();
-    for (const auto& obstacle : w.obstacles) {
-      best = free_motion::AdvanceBound(mesh, screw, reach, MeshOf(*obstacle),
-                                       to_mesh * obstacle->getTransform(), best);
-      if (best <= 0) break;
+    for (int k = 0; k < static_cast<int>(w.obstacles.size()) && best > 0; ++k) {
+      free_motion::TrianglePair found;
+      best = free_motion::AdvanceBound(mesh, motions[i].screw, motions[i].reach,
+                                       MeshOf(*w.obstacles[k]), obstacle_pose(i, k), best, &found);
+      if (found.mesh >= 0) hint = AdvanceHint{.body = i, .obstacle = k, .pair = found};
     }
   }
   return best;

@@ -11,9 +11,6 @@ namespace hgraph::free_motion {
 namespace {
 
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
-// Steps of a pair of triangles before its place is taken as the bound: a pair still closing in
-// after this many steps is nearly touching (or creeping along a long contact).
-constexpr int kMaxTriangleSteps = 8;
 
 using TriangleDistance = fcl::detail::TriangleDistance<double>;
 
@@ -27,6 +24,11 @@ class Advancer {
         rotation_(obstacle_pose.linear()),
         translation_(obstacle_pose.translation()),
         best_(best) {}
+
+  double RunPair(const TrianglePair& pair) {
+    Triangles(pair.mesh, pair.obstacle);
+    return best_;
+  }
 
   double Run(double reach) {
     double rho = reach;
@@ -80,41 +82,41 @@ class Advancer {
     }
   }
 
-  // Advances one pair of triangles from their exact places until they are seen apart for good,
-  // or past best_, or out of steps (best_ then drops to where they got).
+  // One pair of triangles: the advancement from their places at s = 0 (0 in contact).
   void Triangles(int m_id, int o_id) {
     const fcl::Triangle& tm = mesh_.tri_indices[m_id];
     const fcl::Triangle& to = obstacle_.tri_indices[o_id];
-    fcl::Vector3d start[3];
-    fcl::Vector3d moved[3];
+    fcl::Vector3d moving[3];
     fcl::Vector3d fixed[3];
     double rho = 0;
     for (int k = 0; k < 3; ++k) {
-      start[k] = mesh_.vertices[tm[k]];
-      rho = std::max(rho, screw_.Reach(start[k]));
+      moving[k] = mesh_.vertices[tm[k]];
+      rho = std::max(rho, screw_.Reach(moving[k]));
       fixed[k] = rotation_ * obstacle_.vertices[to[k]] + translation_;
     }
-    const double turn = screw_.angle * rho;
-    double s = 0;
-    for (int step = 0; step < kMaxTriangleSteps; ++step) {
-      for (int k = 0; k < 3; ++k) moved[k] = s == 0 ? start[k] : screw_.At(start[k], s);
-      fcl::Vector3d p;
-      fcl::Vector3d q;
-      const double d = TriangleDistance::triDistance(moved, fixed, p, q);
-      if (d <= 0) {
-        best_ = std::min(best_, s);
-        return;
-      }
-      const double speed = screw_.translation.dot((q - p) / d) + turn;
-      if (speed <= 0) return;
-      s += d / speed;
-      if (s >= best_) return;
+    fcl::Vector3d p;
+    fcl::Vector3d q;
+    const double d = TriangleDistance::triDistance(moving, fixed, p, q);
+    if (d <= 0) {
+      Set(0, m_id, o_id);
+      return;
     }
+    const double speed = screw_.translation.dot((q - p) / d) + screw_.angle * rho;
+    if (speed > 0 && d / speed < best_) Set(d / speed, m_id, o_id);
+  }
+
+ public:
+  const TrianglePair& found() const { return found_; }
+
+ private:
+  void Set(double s, int m_id, int o_id) {
     best_ = s;
+    found_ = TrianglePair{.mesh = m_id, .obstacle = o_id};
   }
 
   const MeshModel& mesh_;
   const Screw& screw_;
+  TrianglePair found_;
   const MeshModel& obstacle_;
   const Eigen::Matrix3d rotation_;
   const Eigen::Vector3d translation_;
@@ -122,10 +124,6 @@ class Advancer {
 };
 
 }  // namespace
-
-Eigen::Vector3d Screw::At(const Eigen::Vector3d& m, double s) const {
-  return center + Eigen::AngleAxisd(s * angle, axis) * (m - center) + s * translation;
-}
 
 double Screw::Reach(const Eigen::Vector3d& m) const {
   return radial ? (m - center).norm() : axis.cross(m - center).norm();
@@ -139,10 +137,22 @@ double MeshReach(const MeshModel& mesh, const Screw& screw) {
 }
 
 double AdvanceBound(const MeshModel& mesh, const Screw& screw, double reach,
-                    const MeshModel& obstacle, const Eigen::Isometry3d& obstacle_pose,
-                    double limit) {
+                    const MeshModel& obstacle, const Eigen::Isometry3d& obstacle_pose, double limit,
+                    TrianglePair* found) {
   if (limit <= 0 || mesh.getNumBVs() == 0 || obstacle.getNumBVs() == 0) return std::max(0.0, limit);
-  return Advancer(mesh, screw, obstacle, obstacle_pose, limit).Run(reach);
+  Advancer advancer(mesh, screw, obstacle, obstacle_pose, limit);
+  const double best = advancer.Run(reach);
+  if (found != nullptr && best < limit) *found = advancer.found();
+  return best;
+}
+
+double PairBound(const MeshModel& mesh, const Screw& screw, const MeshModel& obstacle,
+                 const Eigen::Isometry3d& obstacle_pose, const TrianglePair& pair, double limit) {
+  if (limit <= 0 || pair.mesh < 0 || pair.mesh >= mesh.num_tris || pair.obstacle < 0 ||
+      pair.obstacle >= obstacle.num_tris) {
+    return std::max(0.0, limit);
+  }
+  return Advancer(mesh, screw, obstacle, obstacle_pose, limit).RunPair(pair);
 }
 
 }  // namespace hgraph::free_motion

@@ -511,6 +511,12 @@ EdgeReport LocalPlanner::CheckEdge(const EdgeCheckRequest& request) const {
   }
   report.has_clearance = true;
   report.certified = check.certified();
+  if (!report.certified && options_.direction_bound && world_->CanAdvance()) {
+    // The profile's stretches did not add up; advancement along the separating directions may
+    // still certify the motion (a slide along a wall), as it does without a profile.
+    EdgeCheck advance(s, impl_->body_component, impl_->reach, context, from, to, request.cancel);
+    report.certified = advance.AdvanceByDirection(segments).certified;
+  }
   return finish();
 }
 
