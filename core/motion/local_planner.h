@@ -58,12 +58,13 @@ struct LocalPlannerOptions {
   // FCL pruning from a distance near the answer instead of from the threshold or infinity.
   // False: every query starts afresh.
   bool warm_start = true;
-  // Certificates (the modes that keep no profile) advance from each sample as far as the rest of
-  // the motion is certainly free, measured along the directions that separate the robot from
-  // the obstacles (CollisionContext::FreeFraction), where the world allows it
-  // (CollisionWorld::CanAdvance): a motion that slides along an obstacle is not held back to
-  // steps of its clearance. Elsewhere, or false: the two-sided advancement on clearances above.
-  bool direction_bound = false;
+  // Certificates advance from each sample as far as the rest of the motion is certainly free,
+  // measured along the directions that separate the robot from the obstacles
+  // (CollisionContext::FreeFraction), where the world allows it (CollisionWorld::CanAdvance): a
+  // motion that slides along an obstacle is not held back to steps of its clearance. A profile
+  // whose stretches do not add up is certified this way too. Elsewhere, or false: the two-sided
+  // advancement on clearances above, and the profile's own certificate.
+  bool direction_bound = true;
 };
 
 // The clearance bound of a world (a distance field sampled on `threads` threads, 0: all cores,

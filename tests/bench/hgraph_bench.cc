@@ -92,8 +92,8 @@ struct Problem {
   std::unique_ptr<LocalPlanner> unbounded_planner;
   // Every distance query started afresh (warm_start off).
   std::unique_ptr<LocalPlanner> cold_planner;
-  // Certificates by direction-aware advancement (direction_bound on).
-  std::unique_ptr<LocalPlanner> direction_planner;
+  // Certificates by two-sided advancement on clearances alone (direction_bound off).
+  std::unique_ptr<LocalPlanner> classic_planner;
   double resolution = 0.01;
   std::vector<InputPath> inputs;
   std::vector<double> input_lengths;
@@ -126,7 +126,7 @@ struct Method {
   double rel_err = 0;            // > 0: runs on Problem::rel_planners[rel_err]
   bool unbounded = false;        // runs on Problem::unbounded_planner
   bool cold = false;             // runs on Problem::cold_planner
-  bool direction = false;        // runs on Problem::direction_planner
+  bool classic = false;          // runs on Problem::classic_planner
   // Runs after the others, given Problem::equal_time_ms as its whole engine budget.
   bool equal_time = false;
   // OMPL's pipeline as OMPL ships it (its DiscreteMotionValidator): the name of the certified
@@ -232,7 +232,7 @@ Run RunOnce(const Method& m, const Problem& p, double k) {
                                 : m.rel_err > 0   ? *p.rel_planners.at(m.rel_err)
                                 : m.unbounded     ? *p.unbounded_planner
                                 : m.cold          ? *p.cold_planner
-                                : m.direction     ? *p.direction_planner
+                                : m.classic       ? *p.classic_planner
                                                   : *p.planner;
   CountingChecker counter(planner);
   const int64_t cc0 = planner.total_collision_checks();
@@ -310,9 +310,12 @@ Method HgraphMethod(const std::string& name, const std::string& label, MeasureSp
 // The defaults given a whole engine budget (build, search and post-optimization): the H-Graph is
 // built and searched in full, and the post-optimization ends where the budget does (the
 // server's optimize_to_deadline). Its output is the best certified path at that time.
-Method EqualTimeMethod() {
-  return Method{.name = "hgraph-equal-time",
-                .label = "hgraph defaults in OMPL as shipped's time",
+Method EqualTimeMethod(const std::string& name = "hgraph-equal-time",
+                       const std::string& label = "hgraph defaults in OMPL as shipped's time",
+                       bool classic = false) {
+  return Method{.name = name,
+                .label = label,
+                .classic = classic,
                 .equal_time = true,
                 .run = [](const ClearanceChecker& checker, const Problem& p) {
                   const auto until =
@@ -352,38 +355,40 @@ std::vector<Method> Methods(const Problem& p, bool inverse_clearance_pair, uint6
   // CheckPaths like every other (certified, not certified, or in collision).
   m.push_back(HgraphMethod("hgraph-sampled", "hgraph --check sampled", {},
                            MergeOptions{.check_mode = CheckMode::kSampled}));
-  // The defaults on a checker with the scene's clearance bound (`hgraph-server
+  // The defaults with certificates on clearances alone (two-sided advancement,
+  // LocalPlannerOptions::direction_bound off): what advancement along the separating directions
+  // gains. The next four change what these certificates cost, and run with it off too.
+  Method classic = HgraphMethod("hgraph-classic-advancement",
+                                "hgraph defaults, certificates on clearances alone", {}, {});
+  classic.classic = true;
+  m.push_back(std::move(classic));
+  // The same on a checker with the scene's clearance bound (`hgraph-server
   // --clearance-bound`): what the bound gains and costs.
-  Method bounded =
-      HgraphMethod("hgraph-clearance-bound", "hgraph defaults + --clearance-bound", {}, {});
+  Method bounded = HgraphMethod("hgraph-clearance-bound",
+                                "certificates on clearances + --clearance-bound", {}, {});
   bounded.clearance_bound = true;
   m.push_back(std::move(bounded));
   // The defaults with certificates on unbounded distances: what the threshold queries gain.
   Method unbounded = HgraphMethod("hgraph-unbounded-certificates",
-                                  "hgraph defaults, certificates without threshold", {}, {});
+                                  "certificates on clearances without threshold", {}, {});
   unbounded.unbounded = true;
   m.push_back(std::move(unbounded));
   // The defaults with every distance query started afresh: what warm starts gain.
-  Method cold =
-      HgraphMethod("hgraph-cold-queries", "hgraph defaults, queries without warm start", {}, {});
+  Method cold = HgraphMethod("hgraph-cold-queries",
+                             "certificates on clearances, queries without warm start", {}, {});
   cold.cold = true;
   m.push_back(std::move(cold));
-  Method direction =
-      HgraphMethod("hgraph-direction-bound",
-                   "hgraph defaults, certificates along separating directions", {}, {});
-  direction.direction = true;
-  m.push_back(std::move(direction));
   // The defaults with the post-optimization's searches profiling motions whose certificate
   // stalls, as the first search does: what refusing them gains and costs.
   m.push_back(HgraphMethod("hgraph-profiled-stalls",
                            "hgraph defaults, post-optimization profiles stalled motions", {},
                            MergeOptions{.give_up_stalled = false}));
-  // The defaults with certificates on FCL's early-stopped distance: what each error gains.
+  // Certificates on clearances, FCL's early-stopped distance: what each error gains.
   for (double rel : kCertificateRelErrs) {
     std::ostringstream name;
     name << rel;
     Method early = HgraphMethod("hgraph-rel-err-" + name.str(),
-                                "hgraph defaults, certificate rel_err " + name.str(), {}, {});
+                                "certificates on clearances, rel_err " + name.str(), {}, {});
     early.rel_err = rel;
     m.push_back(std::move(early));
   }
@@ -436,6 +441,9 @@ std::vector<Method> Methods(const Problem& p, bool inverse_clearance_pair, uint6
                                                              {.seed = seed, .resolution = res})};
                      }});
   m.push_back(EqualTimeMethod());
+  m.push_back(EqualTimeMethod("hgraph-equal-time-classic-advancement",
+                              "hgraph, certificates on clearances alone, in OMPL as shipped's time",
+                              true));
   if (inverse_clearance_pair) {
     const MeasureSpec ic{.type = MeasureType::kInverseClearance, .k = 3};
     m.push_back(HgraphMethod(
@@ -473,16 +481,22 @@ Problem LoadProblem(const std::string& name, const std::string& file, const fs::
   p.planner =
       std::make_unique<LocalPlanner>(p.world, LocalPlannerOptions{.resolution = p.resolution});
   p.bound_planner = std::make_unique<LocalPlanner>(
-      p.world, LocalPlannerOptions{.resolution = p.resolution, .clearance_bound = bound});
-  p.unbounded_planner = std::make_unique<LocalPlanner>(
-      p.world, LocalPlannerOptions{.resolution = p.resolution, .certificate_threshold = false});
-  p.direction_planner = std::make_unique<LocalPlanner>(
-      p.world, LocalPlannerOptions{.resolution = p.resolution, .direction_bound = true});
+      p.world, LocalPlannerOptions{
+                   .resolution = p.resolution, .clearance_bound = bound, .direction_bound = false});
+  p.unbounded_planner =
+      std::make_unique<LocalPlanner>(p.world, LocalPlannerOptions{.resolution = p.resolution,
+                                                                  .certificate_threshold = false,
+                                                                  .direction_bound = false});
+  p.classic_planner = std::make_unique<LocalPlanner>(
+      p.world, LocalPlannerOptions{.resolution = p.resolution, .direction_bound = false});
   p.cold_planner = std::make_unique<LocalPlanner>(
-      p.world, LocalPlannerOptions{.resolution = p.resolution, .warm_start = false});
+      p.world, LocalPlannerOptions{
+                   .resolution = p.resolution, .warm_start = false, .direction_bound = false});
   for (double rel : kCertificateRelErrs) {
-    p.rel_planners[rel] = std::make_unique<LocalPlanner>(
-        p.world, LocalPlannerOptions{.resolution = p.resolution, .certificate_rel_err = rel});
+    p.rel_planners[rel] =
+        std::make_unique<LocalPlanner>(p.world, LocalPlannerOptions{.resolution = p.resolution,
+                                                                    .certificate_rel_err = rel,
+                                                                    .direction_bound = false});
   }
   const fs::path inputs_file = out_dir / "inputs" / (name + ".json");
   if (fs::exists(inputs_file)) {

@@ -197,8 +197,8 @@ TEST(ClearanceBoundTest, CertificatesWithTheBoundAreExactCertificates) {
     const auto world = LoadWorld(p);
     const auto bound = ClearanceBound::Build(world, kTestOptions);
     ASSERT_NE(bound, nullptr);
-    const LocalPlanner exact(world);
-    const LocalPlanner bounded(world, {.clearance_bound = bound});
+    const LocalPlanner exact(world, {.direction_bound = false});
+    const LocalPlanner bounded(world, {.clearance_bound = bound, .direction_bound = false});
     std::mt19937_64 rng(11);
     std::vector<Config> free;
     while (free.size() < 60) {
@@ -248,8 +248,8 @@ TEST(ClearanceBoundTest, MergedPathsWithTheBoundAreCertifiedExactly) {
   const auto world = LoadWorld(p);
   const auto bound = ClearanceBound::Build(world);
   ASSERT_NE(bound, nullptr);
-  const LocalPlanner exact(world);
-  const LocalPlanner bounded(world, {.clearance_bound = bound});
+  const LocalPlanner exact(world, {.direction_bound = false});
+  const LocalPlanner bounded(world, {.clearance_bound = bound, .direction_bound = false});
   const std::vector<InputPath> inputs =
       LoadPathsFile(kRoot + "/tests/bench/results/seed1/inputs/hole_wall.json", world->space());
   const MergeResult merged = Merge(bounded, MergeRequest{.paths = inputs});

@@ -83,8 +83,8 @@ TEST(EarlyStopTest, CertificatesOnTheBoundAreExactCertificates) {
   for (const MeshProblem& p : MeshProblems()) {
     SCOPED_TRACE(p.name);
     const auto world = LoadWorld(p);
-    const LocalPlanner exact(world);
-    const LocalPlanner early(world, {.certificate_rel_err = 0.25});
+    const LocalPlanner exact(world, {.direction_bound = false});
+    const LocalPlanner early(world, {.certificate_rel_err = 0.25, .direction_bound = false});
     std::mt19937_64 rng(11);
     std::vector<Config> free;
     while (free.size() < 40) {
@@ -128,8 +128,8 @@ TEST(EarlyStopTest, ThresholdCertificatesDecideAsUnboundedOnes) {
   for (const MeshProblem& p : MeshProblems()) {
     SCOPED_TRACE(p.name);
     const auto world = LoadWorld(p);
-    const LocalPlanner threshold(world);
-    const LocalPlanner unbounded(world, {.certificate_threshold = false});
+    const LocalPlanner threshold(world, {.direction_bound = false});
+    const LocalPlanner unbounded(world, {.certificate_threshold = false, .direction_bound = false});
     std::mt19937_64 rng(13);
     int certified = 0;
     int invalid = 0;
@@ -211,8 +211,8 @@ TEST(EarlyStopTest, WarmStartedChecksDecideAsColdOnes) {
   for (const MeshProblem& p : MeshProblems()) {
     SCOPED_TRACE(p.name);
     const auto world = LoadWorld(p);
-    const LocalPlanner warm(world);
-    const LocalPlanner cold(world, {.warm_start = false});
+    const LocalPlanner warm(world, {.direction_bound = false});
+    const LocalPlanner cold(world, {.warm_start = false, .direction_bound = false});
     std::mt19937_64 rng(19);
     int certified = 0;
     int invalid = 0;
@@ -254,8 +254,8 @@ TEST(EarlyStopTest, WarmStartedChecksDecideAsColdOnes) {
 TEST(EarlyStopTest, MergedPathsOnTheBoundAreCertifiedExactly) {
   const MeshProblem p = MeshProblems()[3];
   const auto world = LoadWorld(p);
-  const LocalPlanner exact(world);
-  const LocalPlanner early(world, {.certificate_rel_err = 0.25});
+  const LocalPlanner exact(world, {.direction_bound = false});
+  const LocalPlanner early(world, {.certificate_rel_err = 0.25, .direction_bound = false});
   const std::vector<InputPath> inputs =
       LoadPathsFile(kRoot + "/tests/bench/results/real/inputs/home.json", world->space());
   const MergeResult merged = Merge(early, MergeRequest{.paths = inputs});

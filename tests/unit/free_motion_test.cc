@@ -126,7 +126,7 @@ TEST(FreeMotionTest, WhatItCallsFreeIsFree) {
       continue;
     }
     const Space& space = world->space();
-    const LocalPlanner planner(world);
+    const LocalPlanner planner(world, {.direction_bound = false});
     auto context = world->MakeContext();
     auto exact = world->MakeContext();
     std::mt19937_64 rng(5);
@@ -179,7 +179,7 @@ TEST(FreeMotionTest, ContactAtTheStartIsZero) {
 TEST(FreeMotionTest, SlidingAlongAWallIsFree) {
   const auto world = WallWorld();
   auto context = world->MakeContext();
-  const LocalPlanner planner(world);
+  const LocalPlanner planner(world, {.direction_bound = false});
   const Config start = Se3(-5, 0.65, 0);
   const Config along = Se3(5, 0.65, 0);
   const double classic = planner.Clearance(start) / planner.MotionBound(start, along);
@@ -198,7 +198,7 @@ TEST(FreeMotionTest, SlidingAlongAWallIsFree) {
 
   // The local planner certifies the slide in a few queries with the direction bound, where
   // two-sided advancement on clearances needs a hundred.
-  const LocalPlanner direction(world, {.direction_bound = true});
+  const LocalPlanner direction(world);
   const EdgeCheckRequest request{.from = &start, .to = &along, .proof = EdgeProof::kCertificate};
   const EdgeReport with = direction.CheckEdge(request);
   const EdgeReport without = planner.CheckEdge(request);
@@ -209,14 +209,14 @@ TEST(FreeMotionTest, SlidingAlongAWallIsFree) {
 }
 
 // What the local planner certifies with the direction bound (with a profile or without) is free
-// at 200 points along it and has a valid exact profile, and a motion it finds in collision
+// at 100 points along it and has a valid exact profile, and a motion it finds in collision
 // collides; it certifies at least what advancement on clearances does, with fewer queries.
 TEST(FreeMotionTest, DirectionCertificatesAreExactCertificates) {
   for (const MeshProblem& p : MeshProblems()) {
     SCOPED_TRACE(p.name);
     const auto world = LoadWorld(p);
-    const LocalPlanner classic(world);
-    const LocalPlanner direction(world, {.direction_bound = true});
+    const LocalPlanner classic(world, {.direction_bound = false});
+    const LocalPlanner direction(world);
     std::mt19937_64 rng(11);
     std::vector<Config> free;
     while (free.size() < 60) {
@@ -271,8 +271,8 @@ TEST(FreeMotionTest, DirectionCertificatesAreExactCertificates) {
 TEST(FreeMotionTest, MergedPathsWithTheDirectionBoundAreCertifiedExactly) {
   const MeshProblem p = MeshProblems()[3];
   const auto world = LoadWorld(p);
-  const LocalPlanner exact(world);
-  const LocalPlanner direction(world, {.direction_bound = true});
+  const LocalPlanner exact(world, {.direction_bound = false});
+  const LocalPlanner direction(world);
   const std::vector<InputPath> inputs =
       LoadPathsFile(kRoot + "/tests/bench/results/real/inputs/home.json", world->space());
   const MergeResult merged = Merge(direction, MergeRequest{.paths = inputs});
