@@ -132,9 +132,10 @@ v1::Session PathMergerService::TouchSession(const std::string& name, const std::
 }
 
 std::shared_ptr<PathMergerService::StoredHGraph> PathMergerService::LoadHGraph(
-    const std::string& name, const std::string& tenant, const std::string& field) {
+    const std::string& name, const std::string& tenant, const std::string& field,
+    const std::function<void(StoredHGraph&)>& first_use) {
   if (!shared_) return nullptr;
-  std::lock_guard loading(hgraph_loading_mutex_);
+  std::unique_lock loading(hgraph_loading_mutex_);
   auto got = shared_->GetHGraph(name);
   if (!got) return nullptr;
   auto& [version, record] = *got;
@@ -169,6 +170,12 @@ std::shared_ptr<PathMergerService::StoredHGraph> PathMergerService::LoadHGraph(
   stored->fingerprint = std::move(record.fingerprint);
   stored->answer = std::move(record.answer);
   stored->input_names = std::move(record.input_names);
+  if (first_use) {
+    // Not yet reachable by any other call: no copy to search, no lock held meanwhile. A call
+    // that asks for it meanwhile loads it too; the last to finish stays in the cache.
+    loading.unlock();
+    first_use(*stored);
+  }
   const size_t bytes = stored->session->memory_bytes();
   // Replaces a stale copy held here (another replica changed it since).
   if (!cache_.Put(CacheKind::kHGraph, name, stored, bytes)) {
