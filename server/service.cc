@@ -196,14 +196,6 @@ SharedState::Write PathMergerService::SaveHGraph(const std::string& name, Stored
                                                  bool cas) {
   if (!shared_) return SharedState::Write::kStored;
   HGraphRecord record;
-  uint64_t expected = 0;
-  {
-    std::lock_guard lock(stored.mutex);
-    record.session = SaveSession(*stored.session);
-    record.generation = stored.generation;
-    record.input_names = stored.input_names;
-    expected = stored.store_version;
-  }
   record.name = name;
   record.tenant = stored.tenant;
   record.resolution = stored.resolution;
@@ -212,7 +204,18 @@ SharedState::Write PathMergerService::SaveHGraph(const std::string& name, Stored
   record.fingerprint = stored.fingerprint;
   record.answer = stored.answer;
   record.scene = stored.scene_digest;
-  const SharedState::Write write = shared_->PutHGraph(record, cas ? expected : 0, expected + 1);
+  uint64_t expected = 0;
+  std::string value;
+  {
+    // The snapshot is written into the record's value under the lock; its checksum and the
+    // write to the store go on without it.
+    std::lock_guard lock(stored.mutex);
+    record.generation = stored.generation;
+    record.input_names = stored.input_names;
+    expected = stored.store_version;
+    value = SharedState::EncodeHGraph(record, expected + 1, stored.session.get());
+  }
+  const SharedState::Write write = shared_->PutHGraph(name, value, cas ? expected : 0);
   if (write == SharedState::Write::kStored) {
     std::lock_guard lock(stored.mutex);
     // A requery may have replaced the session meanwhile: its checks go with the next write.

@@ -15,29 +15,40 @@ namespace {
 constexpr char kMagic[8] = {'H', 'G', 'S', 'E', 'S', 'S', 'N', '\0'};
 
 // Fixed-width little-endian fields (every machine we build for is little-endian; the format
-// says so, and a big-endian reader would have to swap).
+// says so, and a big-endian reader would have to swap). Without a buffer it only counts the
+// bytes (the first pass); with one it writes them there (the second, into a buffer of exactly
+// that size: no growth and no copy of what is written).
 class Writer {
  public:
+  Writer() = default;
+  explicit Writer(char* out) : out_(out) {}
+
   template <typename T>
   void Pod(T value) {
     static_assert(std::is_trivially_copyable_v<T>);
-    const size_t at = out_.size();
-    out_.resize(at + sizeof(T));
-    std::memcpy(out_.data() + at, &value, sizeof(T));
+    if (out_ != nullptr) std::memcpy(out_ + at_, &value, sizeof(T));
+    at_ += sizeof(T);
   }
   void Size(size_t n) { Pod<uint64_t>(n); }
   void Str(const std::string& s) {
     Size(s.size());
-    out_.append(s);
+    Bytes(s.data(), s.size());
   }
   void Vector(const Config& q) {
     Size(static_cast<size_t>(q.size()));
-    for (Eigen::Index i = 0; i < q.size(); ++i) Pod<double>(q[i]);
+    Bytes(q.data(), static_cast<size_t>(q.size()) * sizeof(double));
   }
+  // The items one after the other, as Pod<T> on each would write them.
   template <typename T>
   void PodVector(const std::vector<T>& v) {
+    static_assert(std::is_arithmetic_v<T>);
     Size(v.size());
-    for (const T& x : v) Pod<T>(x);
+    Bytes(v.data(), v.size() * sizeof(T));
+  }
+  template <typename T>
+  void PodRange(const T& ids) {
+    Size(ids.size());
+    for (const auto id : ids) Pod<int32_t>(static_cast<int32_t>(id));
   }
   void Samples(const std::vector<ClearanceSample>& v) {
     Size(v.size());
@@ -45,19 +56,24 @@ class Writer {
   }
   void Witness(const ClearanceWitness& w) {
     Pod<int32_t>(w.body);
-    for (int i = 0; i < 3; ++i) Pod<double>(w.point[i]);
+    Bytes(w.point.data(), 3 * sizeof(double));
     Pod<int32_t>(w.other_body);
-    for (int i = 0; i < 3; ++i) Pod<double>(w.other_point[i]);
+    Bytes(w.other_point.data(), 3 * sizeof(double));
   }
   void SampleItem(const ClearanceSample& s) {
     Pod<double>(s.t);
     Pod<double>(s.clearance);
   }
   void WitnessItem(const ClearanceWitness& w) { Witness(w); }
-  std::string Take() { return std::move(out_); }
+  size_t size() const { return at_; }
 
  private:
-  std::string out_;
+  void Bytes(const void* data, size_t n) {
+    if (out_ != nullptr && n > 0) std::memcpy(out_ + at_, data, n);
+    at_ += n;
+  }
+  char* out_ = nullptr;
+  size_t at_ = 0;
 };
 
 class Reader {
@@ -200,8 +216,7 @@ void WriteNested(Writer& w, const std::vector<std::vector<T>>& v, void (Writer::
 // Reaches the private members of HybridizationSession and HGraph (their friend).
 class SessionSnapshot {
  public:
-  static std::string Save(const HybridizationSession& s) {
-    Writer w;
+  static void Save(const HybridizationSession& s, Writer& w) {
     for (char c : kMagic) w.Pod<char>(c);
     w.Pod<uint32_t>(kSnapshotFormat);
     SaveOptions(w, s.options_);
@@ -213,10 +228,8 @@ class SessionSnapshot {
     w.Pod<int64_t>(s.unreported_.edges_checked);
     w.Pod<int64_t>(s.unreported_.collision_checks);
     w.Pod<int64_t>(s.unreported_.distance_queries);
-    w.PodVector<int32_t>(
-        std::vector<int32_t>(s.unprofiled_result_.begin(), s.unprofiled_result_.end()));
+    w.PodRange(s.unprofiled_result_);
     SaveEvidence(w, s.evidence_);
-    return w.Take();
   }
 
   static HybridizationSession Load(const ClearanceChecker& checker, std::string_view bytes) {
@@ -313,8 +326,8 @@ class SessionSnapshot {
       WriteReport(w, e.report);
     }
     for (size_t p = 0; p < g.paths_.size(); ++p) {
-      w.PodVector<int32_t>(std::vector<int32_t>(g.path_nodes_[p].begin(), g.path_nodes_[p].end()));
-      w.PodVector<int32_t>(std::vector<int32_t>(g.path_edges_[p].begin(), g.path_edges_[p].end()));
+      w.PodRange(g.path_nodes_[p]);
+      w.PodRange(g.path_edges_[p]);
     }
   }
 
@@ -463,8 +476,20 @@ class SessionSnapshot {
   }
 };
 
+void AppendSession(const HybridizationSession& session, std::string* out) {
+  Writer count;
+  SessionSnapshot::Save(session, count);
+  const size_t at = out->size();
+  out->resize(at + count.size());
+  Writer write(out->data() + at);
+  SessionSnapshot::Save(session, write);
+  HGRAPH_CHECK(write.size() == count.size());
+}
+
 std::string SaveSession(const HybridizationSession& session) {
-  return SessionSnapshot::Save(session);
+  std::string out;
+  AppendSession(session, &out);
+  return out;
 }
 
 HybridizationSession LoadSession(const ClearanceChecker& checker, std::string_view bytes) {

@@ -30,6 +30,9 @@ class SnapshotError : public std::runtime_error {
 
 // Thread compatible: reads `session` only (the caller keeps other writers away).
 std::string SaveSession(const HybridizationSession& session);
+// Appends what SaveSession returns to *out (a record that ends with the snapshot is built in
+// one buffer).
+void AppendSession(const HybridizationSession& session, std::string* out);
 
 // The session the bytes hold, checking its motions with `checker` (the scene and resolution the
 // saved one used: the caller's to match). Throws SnapshotError.
