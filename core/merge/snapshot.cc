@@ -138,6 +138,7 @@ class Reader {
     return w;
   }
   bool AtEnd() const { return at_ == in_.size(); }
+  size_t left() const { return in_.size() - at_; }
   [[noreturn]] void Fail(const std::string& what) const {
     throw SnapshotError("H-Graph snapshot at byte " + std::to_string(at_) + ": " + what);
   }
@@ -229,7 +230,7 @@ class SessionSnapshot {
     w.Pod<int64_t>(s.unreported_.collision_checks);
     w.Pod<int64_t>(s.unreported_.distance_queries);
     w.PodRange(s.unprofiled_result_);
-    SaveEvidence(w, s.evidence_);
+    SaveEvidence(w, s.evidence_, *s.checker_);
   }
 
   static HybridizationSession Load(const ClearanceChecker& checker, std::string_view bytes) {
@@ -408,7 +409,60 @@ class SessionSnapshot {
     return g;
   }
 
-  static void SaveEvidence(Writer& w, const EdgeEvidence& v) {
+  // Each edge's ceiling: its size, then, when it lies on its profile's grid (ForEachCeilingPoint
+  // of the edge's stretches, as the evaluator built it), the stretches and its clearances only;
+  // else 0 and its samples.
+  static void WriteCeilings(Writer& w, const EdgeEvidence& v, const ClearanceChecker& checker) {
+    w.Size(v.ceiling.size());
+    for (size_t e = 0; e < v.ceiling.size(); ++e) {
+      const std::vector<ClearanceSample>& ceiling = v.ceiling[e];
+      w.Size(ceiling.size());
+      if (ceiling.empty()) continue;
+      const int stretches = checker.ProfileStretches(v.edge_length[e]);
+      size_t at = 0;
+      bool grid = true;
+      ForEachCeilingPoint(stretches, [&](double t) {
+        grid = grid && at < ceiling.size() && ceiling[at].t == t;
+        ++at;
+      });
+      if (grid && at == ceiling.size()) {
+        w.Pod<int32_t>(stretches);
+        for (const ClearanceSample& c : ceiling) w.Pod<double>(c.clearance);
+      } else {
+        w.Pod<int32_t>(0);
+        for (const ClearanceSample& c : ceiling) w.SampleItem(c);
+      }
+    }
+  }
+
+  static std::vector<std::vector<ClearanceSample>> ReadCeilings(Reader& r, size_t edges) {
+    std::vector<std::vector<ClearanceSample>> v(Count(r, edges));
+    for (std::vector<ClearanceSample>& ceiling : v) {
+      const size_t n = r.Size(8);
+      if (n == 0) continue;
+      const auto stretches = r.Pod<int32_t>();
+      if (stretches < 0) r.Fail("a ceiling of a negative grid");
+      if (stretches == 0) {
+        if (n > (r.left() / 16)) r.Fail("a count past the end");
+        ceiling.resize(n);
+        for (ClearanceSample& s : ceiling) {
+          s.t = r.Pod<double>();
+          s.clearance = r.Pod<double>();
+          if (!(s.t >= 0 && s.t <= 1)) r.Fail("a clearance sample outside [0, 1]");
+        }
+        continue;
+      }
+      ceiling.reserve(n);
+      ForEachCeilingPoint(stretches, [&](double t) {
+        if (ceiling.size() == n) r.Fail("a ceiling shorter than its grid");
+        ceiling.push_back({.t = t, .clearance = r.Pod<double>()});
+      });
+      if (ceiling.size() != n) r.Fail("a ceiling longer than its grid");
+    }
+    return v;
+  }
+
+  static void SaveEvidence(Writer& w, const EdgeEvidence& v, const ClearanceChecker& checker) {
     w.PodVector<double>(v.goal_distance);
     w.PodVector<double>(v.node_clearance);
     w.PodVector<char>(v.node_valid);
@@ -419,7 +473,7 @@ class SessionSnapshot {
     WriteNested(w, v.probes, &Writer::SampleItem);
     w.PodVector<int8_t>(v.probe_rounds);
     w.PodVector<int8_t>(v.scanned);
-    WriteNested(w, v.ceiling, &Writer::SampleItem);
+    WriteCeilings(w, v, checker);
     w.PodVector<int8_t>(v.ceiling_done);
     WriteNested(w, v.probe_witness, &Writer::WitnessItem);
   }
@@ -468,7 +522,7 @@ class SessionSnapshot {
     v.probes = ReadNested<ClearanceSample>(r, edges, sample);
     v.probe_rounds = Sized<int8_t>(r, edges);
     v.scanned = Sized<int8_t>(r, edges);
-    v.ceiling = ReadNested<ClearanceSample>(r, edges, sample);
+    v.ceiling = ReadCeilings(r, edges);
     v.ceiling_done = Sized<int8_t>(r, edges);
     v.probe_witness =
         ReadNested<ClearanceWitness>(r, edges, [](Reader& in) { return in.Witness(); });
