@@ -8,7 +8,6 @@
 #pragma once
 
 #include <algorithm>
-#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -30,15 +29,15 @@ namespace hgraph {
 inline constexpr int kCeilingPoints = 64;
 template <typename F>
 void ForEachCeilingPoint(int stretches, const F& f) {
-  const int points = std::min(stretches - 1, kCeilingPoints);
-  double last = -1;
-  for (int i = 1; i <= points; ++i) {
-    const long k = std::lround(static_cast<double>(i) * stretches / (points + 1));
-    if (k < 1 || k >= stretches) continue;
-    const double t = static_cast<double>(k) / stretches;
-    if (t == last) continue;
-    last = t;
-    f(t);
+  const int64_t points = std::min(stretches - 1, kCeilingPoints);
+  int64_t last = 0;
+  for (int64_t i = 1; i <= points; ++i) {
+    // The nearest integer to i * stretches / (points + 1), halves up (std::lround of the
+    // quotient, whose double is exact enough for a divisor of at most kCeilingPoints + 1).
+    const int64_t k = (2 * i * stretches + points + 1) / (2 * (points + 1));
+    if (k <= last || k >= stretches) continue;
+    last = k;
+    f(static_cast<double>(k) / stretches);
   }
 }
 

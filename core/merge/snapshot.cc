@@ -1,6 +1,7 @@
 #include "core/merge/snapshot.h"
 
 #include <cmath>
+#include <cstddef>
 #include <cstring>
 #include <limits>
 #include <type_traits>
@@ -110,23 +111,33 @@ class Reader {
   Config Vector() {
     const size_t n = Size(sizeof(double));
     Config q(static_cast<Eigen::Index>(n));
-    for (size_t i = 0; i < n; ++i) q[static_cast<Eigen::Index>(i)] = Pod<double>();
+    Bytes(q.data(), n * sizeof(double));
     return q;
   }
+  // What Writer::PodVector wrote (the items' bytes, one after the other).
   template <typename T>
   std::vector<T> PodVector() {
+    static_assert(std::is_arithmetic_v<T>);
     std::vector<T> v(Size(sizeof(T)));
-    for (T& x : v) x = Pod<T>();
+    Bytes(v.data(), v.size() * sizeof(T));
     return v;
   }
+  // What Writer::Samples wrote, each sample's t checked.
   std::vector<ClearanceSample> Samples() {
-    std::vector<ClearanceSample> v(Size(2 * sizeof(double)));
-    for (ClearanceSample& s : v) {
-      s.t = Pod<double>();
-      s.clearance = Pod<double>();
+    std::vector<ClearanceSample> v;
+    SamplesInto(&v);
+    return v;
+  }
+  void SamplesInto(std::vector<ClearanceSample>* v) {
+    // The samples' bytes are their two doubles, t first (as Writer::SampleItem writes them).
+    static_assert(sizeof(ClearanceSample) == 2 * sizeof(double) &&
+                  offsetof(ClearanceSample, t) == 0 &&
+                  offsetof(ClearanceSample, clearance) == sizeof(double));
+    v->resize(Size(sizeof(ClearanceSample)));
+    Bytes(v->data(), v->size() * sizeof(ClearanceSample));
+    for (const ClearanceSample& s : *v) {
       if (!(s.t >= 0 && s.t <= 1)) Fail("a clearance sample outside [0, 1]");
     }
-    return v;
   }
   ClearanceWitness Witness() {
     ClearanceWitness w;
@@ -136,6 +147,18 @@ class Reader {
     for (int i = 0; i < 3; ++i) w.other_point[i] = Pod<double>();
     if (w.body < -1 || w.other_body < -1) Fail("a witness of a negative body");
     return w;
+  }
+  // The next n bytes, skipped.
+  std::string_view Take(size_t n) {
+    Need(n);
+    const std::string_view bytes = in_.substr(at_, n);
+    at_ += n;
+    return bytes;
+  }
+  void Bytes(void* out, size_t n) {
+    Need(n);
+    if (n > 0) std::memcpy(out, in_.data() + at_, n);
+    at_ += n;
   }
   bool AtEnd() const { return at_ == in_.size(); }
   size_t left() const { return in_.size() - at_; }
@@ -217,7 +240,7 @@ void WriteNested(Writer& w, const std::vector<std::vector<T>>& v, void (Writer::
 // Reaches the private members of HybridizationSession and HGraph (their friend).
 class SessionSnapshot {
  public:
-  static void Save(const HybridizationSession& s, Writer& w) {
+  static void Save(const HybridizationSession& s, const std::vector<int32_t>& grids, Writer& w) {
     for (char c : kMagic) w.Pod<char>(c);
     w.Pod<uint32_t>(kSnapshotFormat);
     SaveOptions(w, s.options_);
@@ -230,7 +253,27 @@ class SessionSnapshot {
     w.Pod<int64_t>(s.unreported_.collision_checks);
     w.Pod<int64_t>(s.unreported_.distance_queries);
     w.PodRange(s.unprofiled_result_);
-    SaveEvidence(w, s.evidence_, *s.checker_);
+    SaveEvidence(w, s.evidence_, grids);
+  }
+
+  // Per edge, the stretches of the profile grid its ceiling lies on (ForEachCeilingPoint, as the
+  // evaluator built it), or 0 when it does not or is empty.
+  static std::vector<int32_t> CeilingGrids(const HybridizationSession& s) {
+    const EdgeEvidence& v = s.evidence_;
+    std::vector<int32_t> grids(v.ceiling.size(), 0);
+    for (size_t e = 0; e < v.ceiling.size(); ++e) {
+      const std::vector<ClearanceSample>& ceiling = v.ceiling[e];
+      if (ceiling.empty()) continue;
+      const int stretches = s.checker_->ProfileStretches(v.edge_length[e]);
+      size_t at = 0;
+      bool grid = true;
+      ForEachCeilingPoint(stretches, [&](double t) {
+        grid = grid && at < ceiling.size() && ceiling[at].t == t;
+        ++at;
+      });
+      if (grid && at == ceiling.size()) grids[e] = stretches;
+    }
+    return grids;
   }
 
   static HybridizationSession Load(const ClearanceChecker& checker, std::string_view bytes) {
@@ -412,24 +455,18 @@ class SessionSnapshot {
   // Each edge's ceiling: its size, then, when it lies on its profile's grid (ForEachCeilingPoint
   // of the edge's stretches, as the evaluator built it), the stretches and its clearances only;
   // else 0 and its samples.
-  static void WriteCeilings(Writer& w, const EdgeEvidence& v, const ClearanceChecker& checker) {
+  // Each edge's ceiling: its size, then, on a grid (CeilingGrids), the grid's stretches and its
+  // clearances only; else 0 and its samples.
+  static void WriteCeilings(Writer& w, const EdgeEvidence& v, const std::vector<int32_t>& grids) {
     w.Size(v.ceiling.size());
     for (size_t e = 0; e < v.ceiling.size(); ++e) {
       const std::vector<ClearanceSample>& ceiling = v.ceiling[e];
       w.Size(ceiling.size());
       if (ceiling.empty()) continue;
-      const int stretches = checker.ProfileStretches(v.edge_length[e]);
-      size_t at = 0;
-      bool grid = true;
-      ForEachCeilingPoint(stretches, [&](double t) {
-        grid = grid && at < ceiling.size() && ceiling[at].t == t;
-        ++at;
-      });
-      if (grid && at == ceiling.size()) {
-        w.Pod<int32_t>(stretches);
+      w.Pod<int32_t>(grids[e]);
+      if (grids[e] > 0) {
         for (const ClearanceSample& c : ceiling) w.Pod<double>(c.clearance);
       } else {
-        w.Pod<int32_t>(0);
         for (const ClearanceSample& c : ceiling) w.SampleItem(c);
       }
     }
@@ -452,17 +489,22 @@ class SessionSnapshot {
         }
         continue;
       }
-      ceiling.reserve(n);
+      ceiling.resize(n);
+      size_t at = 0;
       ForEachCeilingPoint(stretches, [&](double t) {
-        if (ceiling.size() == n) r.Fail("a ceiling shorter than its grid");
-        ceiling.push_back({.t = t, .clearance = r.Pod<double>()});
+        if (at < n) ceiling[at].t = t;
+        ++at;
       });
-      if (ceiling.size() != n) r.Fail("a ceiling longer than its grid");
+      if (at != n) r.Fail("a ceiling of another size than its grid");
+      const std::string_view clearances = r.Take(n * sizeof(double));
+      for (size_t i = 0; i < n; ++i) {
+        std::memcpy(&ceiling[i].clearance, clearances.data() + i * sizeof(double), sizeof(double));
+      }
     }
     return v;
   }
 
-  static void SaveEvidence(Writer& w, const EdgeEvidence& v, const ClearanceChecker& checker) {
+  static void SaveEvidence(Writer& w, const EdgeEvidence& v, const std::vector<int32_t>& grids) {
     w.PodVector<double>(v.goal_distance);
     w.PodVector<double>(v.node_clearance);
     w.PodVector<char>(v.node_valid);
@@ -473,7 +515,7 @@ class SessionSnapshot {
     WriteNested(w, v.probes, &Writer::SampleItem);
     w.PodVector<int8_t>(v.probe_rounds);
     w.PodVector<int8_t>(v.scanned);
-    WriteCeilings(w, v, checker);
+    WriteCeilings(w, v, grids);
     w.PodVector<int8_t>(v.ceiling_done);
     WriteNested(w, v.probe_witness, &Writer::WitnessItem);
   }
@@ -512,14 +554,8 @@ class SessionSnapshot {
     for (ClearanceWitness& x : v.node_witness) x = r.Witness();
     v.edge_length = Sized<double>(r, edges);
     v.motion_bound = Sized<double>(r, edges);
-    const auto sample = [](Reader& in) {
-      ClearanceSample s;
-      s.t = in.Pod<double>();
-      s.clearance = in.Pod<double>();
-      if (!(s.t >= 0 && s.t <= 1)) in.Fail("a clearance sample outside [0, 1]");
-      return s;
-    };
-    v.probes = ReadNested<ClearanceSample>(r, edges, sample);
+    v.probes.resize(Count(r, edges));
+    for (std::vector<ClearanceSample>& p : v.probes) r.SamplesInto(&p);
     v.probe_rounds = Sized<int8_t>(r, edges);
     v.scanned = Sized<int8_t>(r, edges);
     v.ceiling = ReadCeilings(r, edges);
@@ -532,11 +568,12 @@ class SessionSnapshot {
 
 void AppendSession(const HybridizationSession& session, std::string* out) {
   Writer count;
-  SessionSnapshot::Save(session, count);
+  const std::vector<int32_t> grids = SessionSnapshot::CeilingGrids(session);
+  SessionSnapshot::Save(session, grids, count);
   const size_t at = out->size();
   out->resize(at + count.size());
   Writer write(out->data() + at);
-  SessionSnapshot::Save(session, write);
+  SessionSnapshot::Save(session, grids, write);
   HGRAPH_CHECK(write.size() == count.size());
 }
 
