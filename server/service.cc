@@ -132,9 +132,10 @@ v1::Session PathMergerService::TouchSession(const std::string& name, const std::
 }
 
 std::shared_ptr<PathMergerService::StoredHGraph> PathMergerService::LoadHGraph(
-    const std::string& name, const std::string& tenant, const std::string& field) {
+    const std::string& name, const std::string& tenant, const std::string& field,
+    const std::function<void(StoredHGraph&)>& first_use) {
   if (!shared_) return nullptr;
-  std::lock_guard loading(hgraph_loading_mutex_);
+  std::unique_lock loading(hgraph_loading_mutex_);
   auto got = shared_->GetHGraph(name);
   if (!got) return nullptr;
   auto& [version, record] = *got;
@@ -169,6 +170,12 @@ std::shared_ptr<PathMergerService::StoredHGraph> PathMergerService::LoadHGraph(
   stored->fingerprint = std::move(record.fingerprint);
   stored->answer = std::move(record.answer);
   stored->input_names = std::move(record.input_names);
+  if (first_use) {
+    // Not yet reachable by any other call: no copy to search, no lock held meanwhile. A call
+    // that asks for it meanwhile loads it too; the last to finish stays in the cache.
+    loading.unlock();
+    first_use(*stored);
+  }
   const size_t bytes = stored->session->memory_bytes();
   // Replaces a stale copy held here (another replica changed it since).
   if (!cache_.Put(CacheKind::kHGraph, name, stored, bytes)) {
@@ -189,14 +196,6 @@ SharedState::Write PathMergerService::SaveHGraph(const std::string& name, Stored
                                                  bool cas) {
   if (!shared_) return SharedState::Write::kStored;
   HGraphRecord record;
-  uint64_t expected = 0;
-  {
-    std::lock_guard lock(stored.mutex);
-    record.session = SaveSession(*stored.session);
-    record.generation = stored.generation;
-    record.input_names = stored.input_names;
-    expected = stored.store_version;
-  }
   record.name = name;
   record.tenant = stored.tenant;
   record.resolution = stored.resolution;
@@ -205,7 +204,18 @@ SharedState::Write PathMergerService::SaveHGraph(const std::string& name, Stored
   record.fingerprint = stored.fingerprint;
   record.answer = stored.answer;
   record.scene = stored.scene_digest;
-  const SharedState::Write write = shared_->PutHGraph(record, cas ? expected : 0, expected + 1);
+  uint64_t expected = 0;
+  std::string value;
+  {
+    // The snapshot is written into the record's value under the lock; its checksum and the
+    // write to the store go on without it.
+    std::lock_guard lock(stored.mutex);
+    record.generation = stored.generation;
+    record.input_names = stored.input_names;
+    expected = stored.store_version;
+    value = SharedState::EncodeHGraph(record, expected + 1, stored.session.get());
+  }
+  const SharedState::Write write = shared_->PutHGraph(name, value, cas ? expected : 0);
   if (write == SharedState::Write::kStored) {
     std::lock_guard lock(stored.mutex);
     // A requery may have replaced the session meanwhile: its checks go with the next write.

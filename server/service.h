@@ -6,6 +6,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -145,8 +146,11 @@ class PathMergerService final : public v1::PathMerger::CallbackService {
   // NOT_FOUND (HGRAPH_NOT_FOUND) if the cache no longer holds it.
   // With a shared store, one not held here is loaded from it, and one held here that another
   // replica has changed since is loaded again.
+  // `first_use`: LoadHGraph's, when this call loads it (`*used` then says it ran).
   std::shared_ptr<StoredHGraph> HeldHGraph(const std::string& name, const std::string& tenant,
-                                           const std::string& field = "hgraph");
+                                           const std::string& field = "hgraph",
+                                           const std::function<void(StoredHGraph&)>& first_use = {},
+                                           bool* used = nullptr);
   // Throws ServiceError RESOURCE_EXHAUSTED TENANT_QUOTA when the tenant's kept H-Graphs hold
   // --tenant-cache-bytes or more (before a merge or an addition grows them).
   void CheckTenantCache(const std::string& tenant);
@@ -162,8 +166,12 @@ class PathMergerService final : public v1::PathMerger::CallbackService {
   // The H-Graph as the shared store holds it, loaded, cached and adopted by its session; null
   // when there is no store, it holds no such H-Graph, or what it holds is unsound (logged).
   // Its session must be held here (the caller has touched it).
-  std::shared_ptr<StoredHGraph> LoadHGraph(const std::string& name, const std::string& tenant,
-                                           const std::string& field);
+  // `first_use`, if given, runs on the loaded H-Graph before any other call can reach it (a
+  // requery's search, on the H-Graph itself rather than on a copy); when it throws, nothing is
+  // kept and the exception propagates.
+  std::shared_ptr<StoredHGraph> LoadHGraph(
+      const std::string& name, const std::string& tenant, const std::string& field,
+      const std::function<void(StoredHGraph&)>& first_use = {});
   // Writes the H-Graph's snapshot to the shared store as its next version: over whatever is
   // there (a merge), or only over the version this replica last wrote or loaded (`cas`).
   // Returns kStored with no store.

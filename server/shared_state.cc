@@ -11,6 +11,7 @@
 
 #include "core/common/client_text.h"
 #include "core/common/digest.h"
+#include "core/merge/snapshot.h"
 
 namespace hgraph::server {
 namespace {
@@ -40,10 +41,20 @@ class Fields {
     AppendTo(out);
     return out;
   }
-  // Appends what Take returns.
-  void AppendTo(std::string& out) const {
-    Append(out, count_);
+  // Appends what Take returns; with `more`, counting that many fields the caller appends.
+  void AppendTo(std::string& out, uint64_t more = 0) const {
+    Append(out, count_ + more);
     out += body_;
+  }
+  // Appends one field that `append` writes at the end of `out`: its size, then its bytes
+  // (the caller's, appended there without a copy).
+  template <typename F>
+  static void AppendField(std::string& out, const F& append) {
+    const size_t at = out.size();
+    Append(out, 0);
+    append(out);
+    const uint64_t size = out.size() - at - 8;
+    std::memcpy(out.data() + at, &size, 8);
   }
   size_t size() const { return 8 + body_.size(); }
 
@@ -415,8 +426,8 @@ void SharedState::Refresh(const std::string& session, const std::string& tenant,
   }
 }
 
-SharedState::Write SharedState::PutHGraph(const HGraphRecord& record, uint64_t expected_version,
-                                          uint64_t version) {
+std::string SharedState::EncodeHGraph(const HGraphRecord& record, uint64_t version,
+                                      const HybridizationSession* session) {
   Fields names;
   for (const std::string& n : record.input_names) names.Add(n);
   Fields fields;
@@ -431,22 +442,39 @@ SharedState::Write SharedState::PutHGraph(const HGraphRecord& record, uint64_t e
   fields.Add(record.fingerprint);
   fields.Add(record.answer);
   fields.Add(names.Take());
-  fields.Add(record.session);
-  // The header, its checksum filled in once the body is there (one copy of the snapshot).
+  // The header, its checksum left for PutHGraph; then the fields, the snapshot last, written
+  // in place.
   std::string value;
-  value.reserve(kHeaderSize + fields.size());
+  value.reserve(kHeaderSize + fields.size() + 8 + (session ? 0 : record.session.size()));
   value.append(kHGraphTag).append(Hex16(version)).append(kHeaderSize - kVersionEnd, '0');
-  fields.AppendTo(value);
+  fields.AppendTo(value, 1);
+  Fields::AppendField(value, [&](std::string& out) {
+    if (session != nullptr) {
+      AppendSession(*session, &out);
+    } else {
+      out += record.session;
+    }
+  });
+  return value;
+}
+
+SharedState::Write SharedState::PutHGraph(const HGraphRecord& record, uint64_t expected_version,
+                                          uint64_t version) {
+  std::string value = EncodeHGraph(record, version);
+  return PutHGraph(record.name, value, expected_version);
+}
+
+SharedState::Write SharedState::PutHGraph(const std::string& name, std::string& value,
+                                          uint64_t expected_version) {
   value.replace(kVersionEnd, kHeaderSize - kVersionEnd,
                 Sha256Hex(std::string_view(value).substr(kHeaderSize)));
-  const std::string key = HGraphKey(record.name);
+  const std::string key = HGraphKey(name);
   try {
     bool stored = true;
     if (expected_version == 0) {
       store_->Set(key, value, ttl_);
       // Listed under its session, so that deleting the session on any replica deletes it.
-      store_->AddMember(SessionHGraphsKey(record.name.substr(0, record.name.find("/hgraphs/"))),
-                        record.name, ttl_);
+      store_->AddMember(SessionHGraphsKey(name.substr(0, name.find("/hgraphs/"))), name, ttl_);
     } else {
       stored =
           store_->SetIfPrefix(key, std::string(kHGraphTag) + Hex16(expected_version), value, ttl_);

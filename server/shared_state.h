@@ -35,6 +35,10 @@
 #include "server/metrics.h"
 #include "server/store.h"
 
+namespace hgraph {
+class HybridizationSession;
+}  // namespace hgraph
+
 namespace hgraph::server {
 
 struct SessionRecord {
@@ -106,6 +110,12 @@ class SharedState {
   // Writes the record as `version`: over whatever is there when `expected_version` is 0 (a new
   // merge), else only over version `expected_version` (an addition, a requery's new checks).
   Write PutHGraph(const HGraphRecord& record, uint64_t expected_version, uint64_t version);
+  // The same in two steps: the record's value as `version` (the snapshot of `session` if given,
+  // written in place, else record.session), built while the caller holds the session still;
+  // then its checksum and the write, the caller's lock released. `value` is EncodeHGraph's.
+  static std::string EncodeHGraph(const HGraphRecord& record, uint64_t version,
+                                  const HybridizationSession* session = nullptr);
+  Write PutHGraph(const std::string& name, std::string& value, uint64_t expected_version);
   // The record and its version, if held and sound.
   std::optional<std::pair<uint64_t, HGraphRecord>> GetHGraph(const std::string& name);
   // The version of the record held (0 when none is, or on failure), read without the snapshot.

@@ -213,7 +213,15 @@ grpc::ServerUnaryReactor* PathMergerService::DeleteSession(grpc::CallbackServerC
 }
 
 std::shared_ptr<PathMergerService::StoredHGraph> PathMergerService::HeldHGraph(
-    const std::string& name, const std::string& tenant, const std::string& field) {
+    const std::string& name, const std::string& tenant, const std::string& field,
+    const std::function<void(StoredHGraph&)>& first_use, bool* used) {
+  if (used != nullptr) *used = false;
+  const auto use = [&](StoredHGraph& fresh) {
+    first_use(fresh);
+    if (used != nullptr) *used = true;
+  };
+  const std::function<void(StoredHGraph&)> on_load =
+      first_use ? std::function<void(StoredHGraph&)>(use) : nullptr;
   TouchSession(SessionRegistry::SessionOfHGraph(name, field), field, tenant);
   auto stored = cache_.Get<StoredHGraph>(CacheKind::kHGraph, name);
   if (shared_ && stored) {
@@ -226,10 +234,14 @@ std::shared_ptr<PathMergerService::StoredHGraph> PathMergerService::HeldHGraph(
     if (held != 0 && shared_->HGraphVersion(name) > held) {
       spdlog::info("{} changed in the store since this replica held it; loading it again",
                    ClientText(name));
-      if (auto fresh = LoadHGraph(name, tenant, field)) stored = fresh;
+      if (auto fresh = LoadHGraph(name, tenant, field, on_load)) {
+        stored = fresh;
+      } else if (used != nullptr) {
+        *used = false;  // not kept: the answer comes from the copy held here
+      }
     }
   } else if (shared_ && sessions_.StateOf(name) == SessionRegistry::HGraphState::kUnknown) {
-    stored = LoadHGraph(name, tenant, field);
+    stored = LoadHGraph(name, tenant, field, on_load);
   }
   if (!stored) {
     throw ServiceError(grpc::StatusCode::NOT_FOUND, "HGRAPH_NOT_FOUND", field,
@@ -262,10 +274,21 @@ grpc::ServerUnaryReactor* PathMergerService::Requery(grpc::CallbackServerContext
   auto* call = new UnaryCall(this, context, "Requery", request->hgraph());
   call->Run(
       [=, this](const CancelToken& token) {
-        const auto stored = HeldHGraph(request->hgraph(), call->tenant());
-        const MeasureSpec measure = MeasureFromProto(request->measure());
-        const MergeResult result =
-            QueryStored(*stored, measure, {}, token, ReportClearance(*request));
+        // An H-Graph this call loads is searched as loaded, before any other call can reach
+        // it; one held here on a copy (QueryStored).
+        std::optional<MergeResult> first;
+        bool loaded = false;
+        const auto stored = HeldHGraph(
+            request->hgraph(), call->tenant(), "hgraph",
+            [&](StoredHGraph& fresh) {
+              first = fresh.session->Query(MeasureFromProto(request->measure()), {}, token,
+                                           ReportClearance(*request));
+            },
+            &loaded);
+        const MergeResult result = loaded
+                                       ? std::move(*first)
+                                       : QueryStored(*stored, MeasureFromProto(request->measure()),
+                                                     {}, token, ReportClearance(*request));
         *response->mutable_result() = MergeResultToProto(result);
         EchoEvaluation(stored->options, response->mutable_result());
         {

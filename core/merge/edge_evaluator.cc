@@ -15,12 +15,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// Grid points per edge at which the witnesses of its ends and probes bound its clearance from
-// above (EdgeBoundInput::ceiling). Wrench inverse clearance (k = 3, all-pairs, spacing 1): 16,
-// 32, 64 and every grid point take 29347, 24442, 18622 and 17228 distance queries; past 64 the
-// ceilings cost more time than the queries they save.
-constexpr int kCeilingPoints = 64;
-
 // Probe rounds of an edge under a measure that needs clearance (RefineClearanceEdges), before
 // its profile: round r probes the odd multiples of 2^-r of the way (the middle, the quarters,
 // ...). On wrench (inverse clearance k = 3, all-pairs, node spacing 1; before profiles reused
@@ -425,18 +419,11 @@ const std::vector<ClearanceSample>& LazyEdgeEvaluator::CeilingOf(int e) {
     return evidence_.ceiling[e];
   evidence_.ceiling_done[e] = 1;
   evidence_.ceiling[e].clear();
-  const int stretches = checker_->ProfileStretches(evidence_.edge_length[e]);
-  // Evenly spread grid points (all of them on an edge of up to kCeilingPoints + 1 stretches).
-  const int points = std::min(stretches - 1, kCeilingPoints);
-  if (points < 1) return evidence_.ceiling[e];
   std::vector<ClearanceSample>& ceiling = evidence_.ceiling[e];
-  for (int i = 1; i <= points; ++i) {
-    const long k = std::lround(static_cast<double>(i) * stretches / (points + 1));
-    if (k < 1 || k >= stretches) continue;
-    if (!ceiling.empty() && ceiling.back().t == static_cast<double>(k) / stretches) continue;
-    ceiling.push_back({.t = static_cast<double>(k) / stretches,
-                       .clearance = std::numeric_limits<double>::infinity()});
-  }
+  ForEachCeilingPoint(checker_->ProfileStretches(evidence_.edge_length[e]), [&](double t) {
+    ceiling.push_back({.t = t, .clearance = std::numeric_limits<double>::infinity()});
+  });
+  if (ceiling.empty()) return ceiling;
   std::vector<ClearanceWitness> witnesses = evidence_.probe_witness[e];
   witnesses.push_back(from);
   witnesses.push_back(to);

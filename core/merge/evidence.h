@@ -7,6 +7,7 @@
 // edges' entries may be written by distinct threads.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -17,6 +18,28 @@
 #include "core/space/space.h"
 
 namespace hgraph {
+
+// Where an edge's ceiling bounds its clearance: at most kCeilingPoints points of the grid of a
+// profile of `stretches` stretches (t = k / stretches), evenly spread (all of them on an edge of
+// up to kCeilingPoints + 1 stretches), each once, interior only, in order of t. Calls f(t) for
+// each. The snapshot (snapshot.h) stores a ceiling on this grid as its clearances alone.
+// Wrench inverse clearance (k = 3, all-pairs, spacing 1): 16, 32, 64 and every grid point take
+// 29347, 24442, 18622 and 17228 distance queries; past 64 the ceilings cost more time than the
+// queries they save.
+inline constexpr int kCeilingPoints = 64;
+template <typename F>
+void ForEachCeilingPoint(int stretches, const F& f) {
+  const int64_t points = std::min(stretches - 1, kCeilingPoints);
+  int64_t last = 0;
+  for (int64_t i = 1; i <= points; ++i) {
+    // The nearest integer to i * stretches / (points + 1), halves up (std::lround of the
+    // quotient, whose double is exact enough for a divisor of at most kCeilingPoints + 1).
+    const int64_t k = (2 * i * stretches + points + 1) / (2 * (points + 1));
+    if (k <= last || k >= stretches) continue;
+    last = k;
+    f(static_cast<double>(k) / stretches);
+  }
+}
 
 struct EdgeEvidence {
   // Per node.

@@ -1,6 +1,7 @@
 #include "core/merge/snapshot.h"
 
 #include <cmath>
+#include <cstddef>
 #include <cstring>
 #include <limits>
 #include <type_traits>
@@ -15,29 +16,40 @@ namespace {
 constexpr char kMagic[8] = {'H', 'G', 'S', 'E', 'S', 'S', 'N', '\0'};
 
 // Fixed-width little-endian fields (every machine we build for is little-endian; the format
-// says so, and a big-endian reader would have to swap).
+// says so, and a big-endian reader would have to swap). Without a buffer it only counts the
+// bytes (the first pass); with one it writes them there (the second, into a buffer of exactly
+// that size: no growth and no copy of what is written).
 class Writer {
  public:
+  Writer() = default;
+  explicit Writer(char* out) : out_(out) {}
+
   template <typename T>
   void Pod(T value) {
     static_assert(std::is_trivially_copyable_v<T>);
-    const size_t at = out_.size();
-    out_.resize(at + sizeof(T));
-    std::memcpy(out_.data() + at, &value, sizeof(T));
+    if (out_ != nullptr) std::memcpy(out_ + at_, &value, sizeof(T));
+    at_ += sizeof(T);
   }
   void Size(size_t n) { Pod<uint64_t>(n); }
   void Str(const std::string& s) {
     Size(s.size());
-    out_.append(s);
+    Bytes(s.data(), s.size());
   }
   void Vector(const Config& q) {
     Size(static_cast<size_t>(q.size()));
-    for (Eigen::Index i = 0; i < q.size(); ++i) Pod<double>(q[i]);
+    Bytes(q.data(), static_cast<size_t>(q.size()) * sizeof(double));
   }
+  // The items one after the other, as Pod<T> on each would write them.
   template <typename T>
   void PodVector(const std::vector<T>& v) {
+    static_assert(std::is_arithmetic_v<T>);
     Size(v.size());
-    for (const T& x : v) Pod<T>(x);
+    Bytes(v.data(), v.size() * sizeof(T));
+  }
+  template <typename T>
+  void PodRange(const T& ids) {
+    Size(ids.size());
+    for (const auto id : ids) Pod<int32_t>(static_cast<int32_t>(id));
   }
   void Samples(const std::vector<ClearanceSample>& v) {
     Size(v.size());
@@ -45,19 +57,24 @@ class Writer {
   }
   void Witness(const ClearanceWitness& w) {
     Pod<int32_t>(w.body);
-    for (int i = 0; i < 3; ++i) Pod<double>(w.point[i]);
+    Bytes(w.point.data(), 3 * sizeof(double));
     Pod<int32_t>(w.other_body);
-    for (int i = 0; i < 3; ++i) Pod<double>(w.other_point[i]);
+    Bytes(w.other_point.data(), 3 * sizeof(double));
   }
   void SampleItem(const ClearanceSample& s) {
     Pod<double>(s.t);
     Pod<double>(s.clearance);
   }
   void WitnessItem(const ClearanceWitness& w) { Witness(w); }
-  std::string Take() { return std::move(out_); }
+  size_t size() const { return at_; }
 
  private:
-  std::string out_;
+  void Bytes(const void* data, size_t n) {
+    if (out_ != nullptr && n > 0) std::memcpy(out_ + at_, data, n);
+    at_ += n;
+  }
+  char* out_ = nullptr;
+  size_t at_ = 0;
 };
 
 class Reader {
@@ -94,23 +111,33 @@ class Reader {
   Config Vector() {
     const size_t n = Size(sizeof(double));
     Config q(static_cast<Eigen::Index>(n));
-    for (size_t i = 0; i < n; ++i) q[static_cast<Eigen::Index>(i)] = Pod<double>();
+    Bytes(q.data(), n * sizeof(double));
     return q;
   }
+  // What Writer::PodVector wrote (the items' bytes, one after the other).
   template <typename T>
   std::vector<T> PodVector() {
+    static_assert(std::is_arithmetic_v<T>);
     std::vector<T> v(Size(sizeof(T)));
-    for (T& x : v) x = Pod<T>();
+    Bytes(v.data(), v.size() * sizeof(T));
     return v;
   }
+  // What Writer::Samples wrote, each sample's t checked.
   std::vector<ClearanceSample> Samples() {
-    std::vector<ClearanceSample> v(Size(2 * sizeof(double)));
-    for (ClearanceSample& s : v) {
-      s.t = Pod<double>();
-      s.clearance = Pod<double>();
+    std::vector<ClearanceSample> v;
+    SamplesInto(&v);
+    return v;
+  }
+  void SamplesInto(std::vector<ClearanceSample>* v) {
+    // The samples' bytes are their two doubles, t first (as Writer::SampleItem writes them).
+    static_assert(sizeof(ClearanceSample) == 2 * sizeof(double) &&
+                  offsetof(ClearanceSample, t) == 0 &&
+                  offsetof(ClearanceSample, clearance) == sizeof(double));
+    v->resize(Size(sizeof(ClearanceSample)));
+    Bytes(v->data(), v->size() * sizeof(ClearanceSample));
+    for (const ClearanceSample& s : *v) {
       if (!(s.t >= 0 && s.t <= 1)) Fail("a clearance sample outside [0, 1]");
     }
-    return v;
   }
   ClearanceWitness Witness() {
     ClearanceWitness w;
@@ -121,7 +148,20 @@ class Reader {
     if (w.body < -1 || w.other_body < -1) Fail("a witness of a negative body");
     return w;
   }
+  // The next n bytes, skipped.
+  std::string_view Take(size_t n) {
+    Need(n);
+    const std::string_view bytes = in_.substr(at_, n);
+    at_ += n;
+    return bytes;
+  }
+  void Bytes(void* out, size_t n) {
+    Need(n);
+    if (n > 0) std::memcpy(out, in_.data() + at_, n);
+    at_ += n;
+  }
   bool AtEnd() const { return at_ == in_.size(); }
+  size_t left() const { return in_.size() - at_; }
   [[noreturn]] void Fail(const std::string& what) const {
     throw SnapshotError("H-Graph snapshot at byte " + std::to_string(at_) + ": " + what);
   }
@@ -200,8 +240,7 @@ void WriteNested(Writer& w, const std::vector<std::vector<T>>& v, void (Writer::
 // Reaches the private members of HybridizationSession and HGraph (their friend).
 class SessionSnapshot {
  public:
-  static std::string Save(const HybridizationSession& s) {
-    Writer w;
+  static void Save(const HybridizationSession& s, const std::vector<int32_t>& grids, Writer& w) {
     for (char c : kMagic) w.Pod<char>(c);
     w.Pod<uint32_t>(kSnapshotFormat);
     SaveOptions(w, s.options_);
@@ -213,10 +252,28 @@ class SessionSnapshot {
     w.Pod<int64_t>(s.unreported_.edges_checked);
     w.Pod<int64_t>(s.unreported_.collision_checks);
     w.Pod<int64_t>(s.unreported_.distance_queries);
-    w.PodVector<int32_t>(
-        std::vector<int32_t>(s.unprofiled_result_.begin(), s.unprofiled_result_.end()));
-    SaveEvidence(w, s.evidence_);
-    return w.Take();
+    w.PodRange(s.unprofiled_result_);
+    SaveEvidence(w, s.evidence_, grids);
+  }
+
+  // Per edge, the stretches of the profile grid its ceiling lies on (ForEachCeilingPoint, as the
+  // evaluator built it), or 0 when it does not or is empty.
+  static std::vector<int32_t> CeilingGrids(const HybridizationSession& s) {
+    const EdgeEvidence& v = s.evidence_;
+    std::vector<int32_t> grids(v.ceiling.size(), 0);
+    for (size_t e = 0; e < v.ceiling.size(); ++e) {
+      const std::vector<ClearanceSample>& ceiling = v.ceiling[e];
+      if (ceiling.empty()) continue;
+      const int stretches = s.checker_->ProfileStretches(v.edge_length[e]);
+      size_t at = 0;
+      bool grid = true;
+      ForEachCeilingPoint(stretches, [&](double t) {
+        grid = grid && at < ceiling.size() && ceiling[at].t == t;
+        ++at;
+      });
+      if (grid && at == ceiling.size()) grids[e] = stretches;
+    }
+    return grids;
   }
 
   static HybridizationSession Load(const ClearanceChecker& checker, std::string_view bytes) {
@@ -313,8 +370,8 @@ class SessionSnapshot {
       WriteReport(w, e.report);
     }
     for (size_t p = 0; p < g.paths_.size(); ++p) {
-      w.PodVector<int32_t>(std::vector<int32_t>(g.path_nodes_[p].begin(), g.path_nodes_[p].end()));
-      w.PodVector<int32_t>(std::vector<int32_t>(g.path_edges_[p].begin(), g.path_edges_[p].end()));
+      w.PodRange(g.path_nodes_[p]);
+      w.PodRange(g.path_edges_[p]);
     }
   }
 
@@ -395,7 +452,59 @@ class SessionSnapshot {
     return g;
   }
 
-  static void SaveEvidence(Writer& w, const EdgeEvidence& v) {
+  // Each edge's ceiling: its size, then, when it lies on its profile's grid (ForEachCeilingPoint
+  // of the edge's stretches, as the evaluator built it), the stretches and its clearances only;
+  // else 0 and its samples.
+  // Each edge's ceiling: its size, then, on a grid (CeilingGrids), the grid's stretches and its
+  // clearances only; else 0 and its samples.
+  static void WriteCeilings(Writer& w, const EdgeEvidence& v, const std::vector<int32_t>& grids) {
+    w.Size(v.ceiling.size());
+    for (size_t e = 0; e < v.ceiling.size(); ++e) {
+      const std::vector<ClearanceSample>& ceiling = v.ceiling[e];
+      w.Size(ceiling.size());
+      if (ceiling.empty()) continue;
+      w.Pod<int32_t>(grids[e]);
+      if (grids[e] > 0) {
+        for (const ClearanceSample& c : ceiling) w.Pod<double>(c.clearance);
+      } else {
+        for (const ClearanceSample& c : ceiling) w.SampleItem(c);
+      }
+    }
+  }
+
+  static std::vector<std::vector<ClearanceSample>> ReadCeilings(Reader& r, size_t edges) {
+    std::vector<std::vector<ClearanceSample>> v(Count(r, edges));
+    for (std::vector<ClearanceSample>& ceiling : v) {
+      const size_t n = r.Size(8);
+      if (n == 0) continue;
+      const auto stretches = r.Pod<int32_t>();
+      if (stretches < 0) r.Fail("a ceiling of a negative grid");
+      if (stretches == 0) {
+        if (n > (r.left() / 16)) r.Fail("a count past the end");
+        ceiling.resize(n);
+        for (ClearanceSample& s : ceiling) {
+          s.t = r.Pod<double>();
+          s.clearance = r.Pod<double>();
+          if (!(s.t >= 0 && s.t <= 1)) r.Fail("a clearance sample outside [0, 1]");
+        }
+        continue;
+      }
+      ceiling.resize(n);
+      size_t at = 0;
+      ForEachCeilingPoint(stretches, [&](double t) {
+        if (at < n) ceiling[at].t = t;
+        ++at;
+      });
+      if (at != n) r.Fail("a ceiling of another size than its grid");
+      const std::string_view clearances = r.Take(n * sizeof(double));
+      for (size_t i = 0; i < n; ++i) {
+        std::memcpy(&ceiling[i].clearance, clearances.data() + i * sizeof(double), sizeof(double));
+      }
+    }
+    return v;
+  }
+
+  static void SaveEvidence(Writer& w, const EdgeEvidence& v, const std::vector<int32_t>& grids) {
     w.PodVector<double>(v.goal_distance);
     w.PodVector<double>(v.node_clearance);
     w.PodVector<char>(v.node_valid);
@@ -406,7 +515,7 @@ class SessionSnapshot {
     WriteNested(w, v.probes, &Writer::SampleItem);
     w.PodVector<int8_t>(v.probe_rounds);
     w.PodVector<int8_t>(v.scanned);
-    WriteNested(w, v.ceiling, &Writer::SampleItem);
+    WriteCeilings(w, v, grids);
     w.PodVector<int8_t>(v.ceiling_done);
     WriteNested(w, v.probe_witness, &Writer::WitnessItem);
   }
@@ -445,17 +554,11 @@ class SessionSnapshot {
     for (ClearanceWitness& x : v.node_witness) x = r.Witness();
     v.edge_length = Sized<double>(r, edges);
     v.motion_bound = Sized<double>(r, edges);
-    const auto sample = [](Reader& in) {
-      ClearanceSample s;
-      s.t = in.Pod<double>();
-      s.clearance = in.Pod<double>();
-      if (!(s.t >= 0 && s.t <= 1)) in.Fail("a clearance sample outside [0, 1]");
-      return s;
-    };
-    v.probes = ReadNested<ClearanceSample>(r, edges, sample);
+    v.probes.resize(Count(r, edges));
+    for (std::vector<ClearanceSample>& p : v.probes) r.SamplesInto(&p);
     v.probe_rounds = Sized<int8_t>(r, edges);
     v.scanned = Sized<int8_t>(r, edges);
-    v.ceiling = ReadNested<ClearanceSample>(r, edges, sample);
+    v.ceiling = ReadCeilings(r, edges);
     v.ceiling_done = Sized<int8_t>(r, edges);
     v.probe_witness =
         ReadNested<ClearanceWitness>(r, edges, [](Reader& in) { return in.Witness(); });
@@ -463,8 +566,21 @@ class SessionSnapshot {
   }
 };
 
+void AppendSession(const HybridizationSession& session, std::string* out) {
+  Writer count;
+  const std::vector<int32_t> grids = SessionSnapshot::CeilingGrids(session);
+  SessionSnapshot::Save(session, grids, count);
+  const size_t at = out->size();
+  out->resize(at + count.size());
+  Writer write(out->data() + at);
+  SessionSnapshot::Save(session, grids, write);
+  HGRAPH_CHECK(write.size() == count.size());
+}
+
 std::string SaveSession(const HybridizationSession& session) {
-  return SessionSnapshot::Save(session);
+  std::string out;
+  AppendSession(session, &out);
+  return out;
 }
 
 HybridizationSession LoadSession(const ClearanceChecker& checker, std::string_view bytes) {

@@ -19,7 +19,7 @@
 namespace hgraph {
 
 // Bumped whenever the layout changes: bytes of another format are refused, not misread.
-inline constexpr uint32_t kSnapshotFormat = 1;
+inline constexpr uint32_t kSnapshotFormat = 2;
 
 // Bytes that are not a snapshot this code can load (truncated, another format, indices out of
 // range, configurations of another space). Copyable.
@@ -30,6 +30,9 @@ class SnapshotError : public std::runtime_error {
 
 // Thread compatible: reads `session` only (the caller keeps other writers away).
 std::string SaveSession(const HybridizationSession& session);
+// Appends what SaveSession returns to *out (a record that ends with the snapshot is built in
+// one buffer).
+void AppendSession(const HybridizationSession& session, std::string* out);
 
 // The session the bytes hold, checking its motions with `checker` (the scene and resolution the
 // saved one used: the caller's to match). Throws SnapshotError.

@@ -63,6 +63,37 @@ TEST_F(SnapshotTest, LoadedSessionAnswersAsTheSavedOne) {
   }
 }
 
+// An H-Graph merged under a measure of clearance holds its edges' ceilings (the bounds the lazy
+// search takes from witnesses), saved as their clearances on the profile's grid: loaded, they
+// bound the edges exactly as the saved ones do, so that other measures of clearance take the
+// same path with the same checks.
+TEST_F(SnapshotTest, KeepsTheCeilingsOfAMergeUnderClearance) {
+  MergeRequest request{.paths = testing::CirclePaths(), .measure = Clearance()};
+  request.options.candidates.variant = Variant::kAllPairs;
+  request.options.optimize_ms = 0;
+  HybridizationSession saved(planner_, request);
+  saved.Query(request.measure);
+  const std::string bytes = SaveSession(saved);
+  HybridizationSession loaded = LoadSession(planner_, bytes);
+  EXPECT_EQ(SaveSession(loaded), bytes) << "a loaded session saves to the same bytes";
+
+  const MergeResult again = loaded.Query(Clearance());
+  EXPECT_EQ(again.path.waypoints, saved.Query(Clearance()).path.waypoints);
+  EXPECT_EQ(again.stats.collision_checks, 0);
+  EXPECT_EQ(again.stats.distance_queries, 0);
+  for (const int k : {1, 3}) {
+    const MeasureSpec measure{.type = MeasureType::kInverseClearance, .k = static_cast<double>(k)};
+    const MergeResult from_saved = saved.Query(measure);
+    const MergeResult from_loaded = loaded.Query(measure);
+    EXPECT_EQ(from_loaded.path.waypoints, from_saved.path.waypoints) << "k " << k;
+    EXPECT_EQ(from_loaded.stats.edges_checked, from_saved.stats.edges_checked) << "k " << k;
+    EXPECT_EQ(from_loaded.stats.distance_queries, from_saved.stats.distance_queries) << "k " << k;
+  }
+  for (size_t n = 0; n < bytes.size(); n += 1 + n / 5) {
+    EXPECT_THROW(LoadSession(planner_, bytes.substr(0, n)), SnapshotError) << n << " bytes";
+  }
+}
+
 // Added paths are saved too, with their bridges' reports.
 TEST_F(SnapshotTest, KeepsAddedPaths) {
   HybridizationSession saved = Merged();
