@@ -14,6 +14,13 @@
 // makes the edge invalid (this catches obstacles thinner than the resolution). The refined
 // samples join the profile; EdgeReport::certified says whether every stretch passed.
 //
+// By default (LocalPlannerOptions::direction_bound), where every body and obstacle is a mesh and
+// no pair of bodies is checked against each other, certificates advance instead by how far the
+// rest of the motion is free along the directions that separate the robot from the obstacles
+// (CollisionContext::FreeFraction), and a profile whose stretches do not add up is certified that
+// way: a motion sliding along an obstacle is not held to steps of its clearance. The text below
+// is the certificate elsewhere, or with the option off.
+//
 // With a clearance bound (LocalPlannerOptions::clearance_bound, core/distance), the certificate
 // of the modes that keep no profile (kCertified, kCertifiedQuick, kCertifiedOfValid) takes the
 // bound's cheap lower bound at each sample first, and FCL's exact distance only where the bound
