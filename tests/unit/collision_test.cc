@@ -16,28 +16,14 @@
 
 #include "core/collision/collision_world.h"
 #include "core/common/error.h"
+#include "tests/unit/mesh_problems.h"
 
 namespace hgraph {
 namespace {
 
 constexpr double kTolerance = 1e-6;
 
-// A box mesh centred on the origin: the same solid as ShapeType::kBox, as triangles.
-std::shared_ptr<const Mesh> BoxMesh(const Eigen::Vector3d& size) {
-  auto mesh = std::make_shared<Mesh>();
-  for (int i = 0; i < 8; ++i) {
-    mesh->vertices.push_back(
-        Eigen::Vector3d(i & 1 ? 0.5 : -0.5, i & 2 ? 0.5 : -0.5, i & 4 ? 0.5 : -0.5)
-            .cwiseProduct(size));
-  }
-  const int quads[6][4] = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4},
-                           {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}};
-  for (const auto& q : quads) {
-    mesh->triangles.emplace_back(q[0], q[1], q[2]);
-    mesh->triangles.emplace_back(q[0], q[2], q[3]);
-  }
-  return mesh;
-}
+using testing::BoxMesh;
 
 // A UV sphere: `rings` latitude bands of `segments` quads, poles fanned.
 std::shared_ptr<const Mesh> SphereMesh(double radius, int rings, int segments) {

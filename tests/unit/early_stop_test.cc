@@ -19,30 +19,16 @@
 #include "core/merge/path_check.h"
 #include "core/motion/local_planner.h"
 #include "core/path/path.h"
+#include "tests/unit/mesh_problems.h"
 
 namespace hgraph {
 namespace {
 
+using testing::LoadWorld;
+using testing::MeshProblem;
+using testing::MeshProblems;
+
 const std::string kRoot = HGRAPH_SOURCE_DIR;
-
-struct MeshProblem {
-  std::string name;
-  std::string file;
-};
-
-// Meshes from a few dozen triangles (the bench's walls) to OMPL.app's size (the home), SE(2)
-// and SE(3), one with self-collision.
-std::vector<MeshProblem> MeshProblems() {
-  return {{"hole_wall", kRoot + "/tests/bench/scenes/hole_wall/scene.json"},
-          {"double_wrench", kRoot + "/scenes/double_wrench/scene.json"},
-          {"car_planar", kRoot + "/tests/data/ompl_app_car/car_planar.cfg"},
-          {"home", kRoot + "/tests/bench/scenes/home/scene.json"},
-          {"car_maze", kRoot + "/tests/bench/scenes/car_maze/scene.json"}};
-}
-
-std::shared_ptr<const CollisionWorld> LoadWorld(const MeshProblem& p) {
-  return std::make_shared<const CollisionWorld>(LoadSceneFile(p.file));
-}
 
 // min(exact / (1 + rel), cap) <= bound <= min(exact, cap), and 0 exactly in contact, for random
 // states (most of them in contact or near it) and for caps below and above the clearance.

@@ -19,47 +19,17 @@
 #include "core/merge/path_check.h"
 #include "core/motion/local_planner.h"
 #include "core/path/path.h"
+#include "tests/unit/mesh_problems.h"
 
 namespace hgraph {
 namespace {
 
+using testing::BoxMesh;
+using testing::LoadWorld;
+using testing::MeshProblem;
+using testing::MeshProblems;
+
 const std::string kRoot = HGRAPH_SOURCE_DIR;
-
-struct MeshProblem {
-  std::string name;
-  std::string file;
-};
-
-// SE(2) and SE(3), from a few dozen triangles to real size; double_wrench checks its two bodies
-// against each other, which FreeFraction does not cover.
-std::vector<MeshProblem> MeshProblems() {
-  return {{"hole_wall", kRoot + "/tests/bench/scenes/hole_wall/scene.json"},
-          {"double_wrench", kRoot + "/scenes/double_wrench/scene.json"},
-          {"car_planar", kRoot + "/tests/data/ompl_app_car/car_planar.cfg"},
-          {"home", kRoot + "/tests/bench/scenes/home/scene.json"},
-          {"car_maze", kRoot + "/tests/bench/scenes/car_maze/scene.json"}};
-}
-
-std::shared_ptr<const CollisionWorld> LoadWorld(const MeshProblem& p) {
-  return std::make_shared<const CollisionWorld>(LoadSceneFile(p.file));
-}
-
-// A box mesh centred on the origin.
-std::shared_ptr<const Mesh> BoxMesh(const Eigen::Vector3d& size) {
-  auto mesh = std::make_shared<Mesh>();
-  for (int i = 0; i < 8; ++i) {
-    mesh->vertices.push_back(
-        Eigen::Vector3d(i & 1 ? 0.5 : -0.5, i & 2 ? 0.5 : -0.5, i & 4 ? 0.5 : -0.5)
-            .cwiseProduct(size));
-  }
-  const int quads[6][4] = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4},
-                           {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}};
-  for (const auto& q : quads) {
-    mesh->triangles.emplace_back(q[0], q[1], q[2]);
-    mesh->triangles.emplace_back(q[0], q[2], q[3]);
-  }
-  return mesh;
-}
 
 Config Se3(double x, double y, double z, double yaw = 0) {
   const Eigen::Quaterniond r(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()));
