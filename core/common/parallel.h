@@ -27,6 +27,7 @@
 #include <tbb/info.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
+#include <tbb/task_group.h>
 
 #include <utility>
 #endif
@@ -197,5 +198,44 @@ void ParallelFor(int threads, size_t n, const Body& body) {
 }
 
 #endif
+
+// Runs first() and second(), on two threads when `beside` and another thread is free for it,
+// else first() and then second() in the calling thread; returns when both have returned, and
+// rethrows the first exception either threw. For work split in two halves that watch each
+// other's progress (the second finds little left to do once the first has run), so that a
+// thread left idle by an uneven loop takes a share of the loop's longest item: inside a
+// ParallelFor body, second() is offered to that loop's threads (oneTBB: under its isolation).
+template <class First, class Second>
+void RunBeside(bool beside, const First& first, const Second& second) {
+  if (!beside) {
+    first();
+    second();
+    return;
+  }
+#ifdef HGRAPH_PARALLEL_STD
+  ParallelFor(2, 2, [&](size_t i) {
+    if (i == 0) {
+      first();
+    } else {
+      second();
+    }
+  });
+#else
+  tbb::task_group group;
+  group.run([&second] { second(); });
+  try {
+    first();
+  } catch (...) {
+    // second() watches the same stop as first(); its own error, if any, is dropped.
+    group.cancel();
+    try {
+      group.wait();
+    } catch (...) {
+    }
+    throw;
+  }
+  group.wait();
+#endif
+}
 
 }  // namespace hgraph

@@ -83,7 +83,8 @@ void LazyEdgeEvaluator::CheckEdges(const std::vector<int>& edge_ids, EdgeProof n
                                      .to_valid = evidence_.node_valid[edge.v] != 0,
                                      .samples_valid = previous.state == EdgeState::kValid,
                                      .clearances = known.empty() ? nullptr : &known},
-                           .cancel = &cancel});
+                           .cancel = &cancel,
+                           .threads = threads_});
     } catch (...) {
       // A check stopped by the caller leaves the edge as it was (a stored H-Graph keeps it).
       edge.report = std::move(previous);

@@ -143,7 +143,8 @@ PathCheckResult CheckPaths(const MotionChecker& checker, const PathCheckRequest&
         EdgeCheckRequest{.from = &path.waypoints[jobs[i].from],
                          .to = &path.waypoints[jobs[i].to],
                          .proof = need_clearance ? EdgeProof::kProfile : EdgeProof::kSamples,
-                         .cancel = &request.cancel});
+                         .cancel = &request.cancel,
+                         .threads = threads});
     const int64_t c = checks += reports[i].collision_checks;
     const int64_t q = queries += reports[i].distance_queries;
     reporter.Done(++done, c, q);

@@ -20,13 +20,29 @@ namespace {
 // ratios to OMPL of 0.9446 against 0.9443. With `lazy` (ShortcutRequest::lazy, or sampled), at
 // the samples only.
 EdgeReport Check(const MotionChecker& checker, const Config& a, const Config& b, double safety,
-                 bool lazy, const CancelToken& cancel) {
+                 bool lazy, int threads, const CancelToken& cancel) {
   return checker.CheckEdge(EdgeCheckRequest{.from = &a,
                                             .to = &b,
                                             .proof = safety > 0 ? EdgeProof::kProfile
                                                      : lazy     ? EdgeProof::kSamples
                                                                 : EdgeProof::kCertificateOrGiveUp,
-                                            .cancel = &cancel});
+                                            .cancel = &cancel,
+                                            .threads = threads});
+}
+
+// The certificate of a motion that `at_samples` found valid at its samples (kCertificateOrGiveUp,
+// without checking them again); the report counts both checks.
+EdgeReport Certify(const MotionChecker& checker, const Config& a, const Config& b,
+                   const EdgeReport& at_samples, int threads, const CancelToken& cancel) {
+  EdgeReport report = checker.CheckEdge(EdgeCheckRequest{.from = &a,
+                                                         .to = &b,
+                                                         .proof = EdgeProof::kCertificateOrGiveUp,
+                                                         .known = {.samples_valid = true},
+                                                         .cancel = &cancel,
+                                                         .threads = threads});
+  report.collision_checks += at_samples.collision_checks;
+  report.distance_queries += at_samples.distance_queries;
+  return report;
 }
 
 // Whether a path may take the motion: proven free (and keeping `safety`), or with `lazy` valid at
@@ -87,6 +103,8 @@ struct Candidate {
   double gain = 0;
   std::vector<EdgeReport> reports;
   bool free = false;
+  // Valid at its samples, its certificates not yet asked for (Shortening::CheckBatch).
+  bool at_samples = false;
 };
 
 // One call of ShortcutCertified: the request, and the path being shortened (the result's path,
@@ -122,7 +140,7 @@ class Shortening {
   // Whether CheckMotion gives up where a certificate stalls (EdgeProof::kCertificateOrGiveUp).
   bool GivesUp() const { return request_.safety <= 0 && !lazy_ && !request_.sampled; }
   EdgeReport CheckMotion(const Config& a, const Config& b) const {
-    return Check(checker_, a, b, request_.safety, lazy_ || request_.sampled, cancel_);
+    return Check(checker_, a, b, request_.safety, lazy_ || request_.sampled, threads_, cancel_);
   }
   bool MayTake(const EdgeReport& report) const {
     return hgraph::MayTake(report, request_.safety, lazy_, request_.sampled);
@@ -145,11 +163,13 @@ class Shortening {
   // The partial shortcut of `c` moving `part` straight from c.a to c.b (its points), and its
   // length; `along` is the path's length from a to b.
   double Partial(const Space::Part& part, double along, Candidate* c) const;
-  // Checks each candidate's motions in order, up to the first not proven free.
-  void CheckBatch(std::vector<Candidate>* batch) const;
+  // Checks each candidate's motions in order, up to the first not proven free; with
+  // certificates, at their samples only (Candidate::at_samples), for TakeFromBatch to certify.
+  void CheckBatch(std::vector<Candidate>* batch);
   // The free candidates that gain most, no two sharing an edge of the path, from the path's end
-  // backwards (so that applying them in turn keeps the others' edge indices valid).
-  static std::vector<size_t> TakeFromBatch(const std::vector<Candidate>& batch);
+  // backwards (so that applying them in turn keeps the others' edge indices valid). Certifies
+  // the candidates valid at their samples that would be taken, until every one it takes is free.
+  std::vector<size_t> TakeFromBatch(std::vector<Candidate>* batch);
   // Replaces the stretch of the path between c.a and c.b by the candidate's motions.
   void Splice(Candidate& c);
   // The corner cut at every interior waypoint: the largest f proven free, or none.
@@ -302,7 +322,7 @@ void Shortening::TryRandomPairs() {
     std::vector<Candidate> batch = DrawBatch(attempts, &attempt);
     if (batch.empty()) continue;
     CheckBatch(&batch);
-    for (size_t k : TakeFromBatch(batch)) Splice(batch[k]);
+    for (size_t k : TakeFromBatch(&batch)) Splice(batch[k]);
   }
 }
 
@@ -371,36 +391,67 @@ double Shortening::Partial(const Space::Part& part, double along, Candidate* c) 
   return cost + space_.Distance(*previous, c->b);
 }
 
-void Shortening::CheckBatch(std::vector<Candidate>* batch) const {
+void Shortening::CheckBatch(std::vector<Candidate>* batch) {
+  // With certificates the samples come first: a batch holds candidates valid at their samples
+  // that overlap a better one, and only those taken need a certificate (TakeFromBatch). What it
+  // takes is what certifying every candidate would take.
+  const bool samples_first = GivesUp();
   ParallelFor(threads_, batch->size(), [&](size_t k) {
     Candidate& c = (*batch)[k];
     for (size_t j = 0; j <= c.points.size(); ++j) {
       if (cancel_.stopped()) return;
       const Config& from = j == 0 ? c.a : c.points[j - 1];
       const Config& to = j < c.points.size() ? c.points[j] : c.b;
-      c.reports.push_back(CheckMotion(from, to));
-      if (!MayTake(c.reports.back())) return;
+      c.reports.push_back(samples_first ? Check(checker_, from, to, 0, true, threads_, cancel_)
+                                        : CheckMotion(from, to));
+      if (samples_first ? c.reports.back().state != EdgeState::kValid
+                        : !MayTake(c.reports.back())) {
+        return;
+      }
     }
-    c.free = true;
+    (samples_first ? c.at_samples : c.free) = true;
   });
   cancel_.ThrowIfStopped();
+  for (const Candidate& c : *batch) out_.edges_checked += static_cast<int64_t>(c.reports.size());
 }
 
-std::vector<size_t> Shortening::TakeFromBatch(const std::vector<Candidate>& batch) {
-  std::vector<size_t> order(batch.size());
+std::vector<size_t> Shortening::TakeFromBatch(std::vector<Candidate>* batch) {
+  std::vector<Candidate>& b = *batch;
+  std::vector<size_t> order(b.size());
   std::iota(order.begin(), order.end(), 0);
   std::stable_sort(order.begin(), order.end(),
-                   [&](size_t x, size_t y) { return batch[x].gain > batch[y].gain; });
+                   [&](size_t x, size_t y) { return b[x].gain > b[y].gain; });
   std::vector<size_t> taken;
-  for (size_t k : order) {
-    if (!batch[k].free) continue;
-    const bool overlaps = std::any_of(taken.begin(), taken.end(), [&](size_t o) {
-      return !(batch[k].e1 < batch[o].e0 || batch[o].e1 < batch[k].e0);
+  for (;;) {
+    // The best candidates free or valid at their samples, no two overlapping; those at their
+    // samples are certified, and the choice is made again without any that failed.
+    taken.clear();
+    std::vector<size_t> to_certify;
+    for (size_t k : order) {
+      if (!b[k].free && !b[k].at_samples) continue;
+      const bool overlaps = std::any_of(taken.begin(), taken.end(), [&](size_t o) {
+        return !(b[k].e1 < b[o].e0 || b[o].e1 < b[k].e0);
+      });
+      if (overlaps) continue;
+      taken.push_back(k);
+      if (b[k].at_samples) to_certify.push_back(k);
+    }
+    if (to_certify.empty()) break;
+    ParallelFor(threads_, to_certify.size(), [&](size_t i) {
+      Candidate& c = b[to_certify[i]];
+      for (size_t j = 0; j <= c.points.size(); ++j) {
+        if (cancel_.stopped()) return;
+        const Config& from = j == 0 ? c.a : c.points[j - 1];
+        const Config& to = j < c.points.size() ? c.points[j] : c.b;
+        c.reports[j] = Certify(checker_, from, to, c.reports[j], threads_, cancel_);
+        if (!MayTake(c.reports[j])) break;
+        if (j == c.points.size()) c.free = true;
+      }
+      c.at_samples = false;
     });
-    if (!overlaps) taken.push_back(k);
+    cancel_.ThrowIfStopped();
   }
-  std::sort(taken.begin(), taken.end(),
-            [&](size_t x, size_t y) { return batch[x].e0 > batch[y].e0; });
+  std::sort(taken.begin(), taken.end(), [&](size_t x, size_t y) { return b[x].e0 > b[y].e0; });
   return taken;
 }
 

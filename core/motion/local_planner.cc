@@ -6,10 +6,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "core/common/error.h"
 #include "core/common/limits.h"
+#include "core/common/parallel.h"
 #include "core/distance/clearance_bound.h"
 
 namespace hgraph {
@@ -219,6 +221,14 @@ class EdgeCheck {
 
   Config At(double t) const { return space_.Interpolate(from_, to_, t); }
 
+  // Advancement gives up where a step would be shorter than this fraction of the motion: the
+  // profile's finest refinement.
+  static double Finest(int segments) {
+    return 1.0 / (static_cast<double>(segments) * (1 << LocalPlanner::kMaxRefineDepth));
+  }
+  // The share of the free stretch a step of advancement takes.
+  static constexpr double kMargin = 0.999;
+
   // Every kCancelStride queries, throws if the caller stopped the check.
   void Tick() {
     if (cancel_ != nullptr && ++ticks_ % kCancelStride == 0) cancel_->ThrowIfStopped();
@@ -254,16 +264,38 @@ class EdgeCheck {
 
   // The samples at the resolution, ends first (the end state is the one most likely to be new
   // to the caller), then the interior in bisection order: the t of the first in collision, or
-  // -1 if every one is valid.
-  double FirstInvalidSample(int segments, const EdgeKnown& known) {
+  // -1 if every one is valid. With `beside` (and samples enough to share) another thread free
+  // for it takes the interior samples with this one, in the same order from one cursor; the
+  // answer is the same, since every sample before the first in collision is checked either way.
+  // `context_here` and `checks_elsewhere` as in AdvanceByDirection.
+  double FirstInvalidSample(int segments, const EdgeKnown& known, bool beside,
+                            const std::function<CollisionContext&()>& context_here,
+                            std::atomic<int64_t>* checks_elsewhere) {
     if (!known.to_valid && !context_.Valid(to_)) return 1.0;
     if (!known.from_valid && !context_.Valid(from_)) return 0.0;
-    for (int k : BisectionOrder(segments)) {
-      Tick();
-      const double t = static_cast<double>(k) / segments;
-      if (!context_.Valid(At(t))) return t;
-    }
-    return -1;
+    const std::vector<int> order = BisectionOrder(segments);
+    std::atomic<size_t> next{0};
+    std::atomic<size_t> first_invalid{order.size()};
+    const auto scan = [&](CollisionContext& context) {
+      for (size_t i = next++; i < first_invalid.load(); i = next++) {
+        if (cancel_ != nullptr) cancel_->ThrowIfStopped();
+        if (context.Valid(At(static_cast<double>(order[i]) / segments))) continue;
+        for (size_t known_first = first_invalid.load();
+             i < known_first && !first_invalid.compare_exchange_weak(known_first, i);) {
+        }
+        return;
+      }
+    };
+    RunBeside(
+        beside && segments >= kShareSamples, [&] { scan(context_); },
+        [&] {
+          CollisionContext& context = context_here();
+          const int64_t before = context.collision_checks();
+          scan(context);
+          if (&context != &context_) *checks_elsewhere += context.collision_checks() - before;
+        });
+    const size_t found = first_invalid.load();
+    return found < order.size() ? static_cast<double>(order[found]) / segments : -1;
   }
 
   // What conservative advancement established: a certificate, or a point in contact
@@ -282,9 +314,7 @@ class EdgeCheck {
   Advanced Advance(int segments) {
     const double bound = MotionBound(from_, to_);
     whole_bound_ = bound;
-    const double finest =
-        1.0 / (static_cast<double>(segments) * (1 << LocalPlanner::kMaxRefineDepth));
-    constexpr double kMargin = 0.999;
+    const double finest = Finest(segments);
     Bounded a = CertClearance(0, from_);
     if (a.exact && a.clearance <= 0) return Advanced{.invalid_at = 0.0};
     Config q_a = from_;
@@ -312,26 +342,34 @@ class EdgeCheck {
   }
 
   // Conservative advancement along the separating directions (LocalPlannerOptions::
-  // direction_bound): from each sample the rest of the motion is free for the fraction
-  // FreeFraction finds, and the next sample goes just short of its end. It continues a little
-  // past `to`, so that a certificate covers the end state too.
-  Advanced AdvanceByDirection(int segments) {
-    const double finest =
-        1.0 / (static_cast<double>(segments) * (1 << LocalPlanner::kMaxRefineDepth));
-    constexpr double kMargin = 0.999;
-    constexpr double kPastEnd = 1.001;
-    double t = 0;
-    Config q = from_;
-    while (true) {
-      Tick();
-      const double s = context_.FreeFraction(q, to_, kPastEnd);
-      if (s > 1) return Advanced{.certified = true};
-      if (s <= 0 && t == 0) return Advanced{.invalid_at = 0.0};
-      const double step = kMargin * s * (1 - t);
-      if (step < finest) return Advanced{};
-      t += step;
-      q = At(t);
-    }
+  // direction_bound), from both ends of the motion: each front steps just short of where
+  // CollisionContext::FreeFraction says the rest of the way to the other end is free, and the
+  // motion is certified once the fronts pass each other (or one passes the far end). The front
+  // from `from` runs first; the one from `to` runs beside it on another thread when `beside` and
+  // one is free (`context_here` gives that thread's context, and the queries it runs there are
+  // added to `queries_elsewhere`), else afterwards, from where the first stopped. Either way the
+  // verdict is the same: certified exactly when the point where the first front stalls (or the
+  // far end) lies beyond the point where the second one stalls, so a motion that grazes an
+  // obstacle is certified from whichever side reaches past the graze. Without `both_ends`, the
+  // first front alone.
+  Advanced AdvanceByDirection(int segments, bool both_ends, bool beside,
+                              const std::function<CollisionContext&()>& context_here,
+                              std::atomic<int64_t>* queries_elsewhere) {
+    const double finest = Finest(segments);
+    Fronts fronts;
+    RunBeside(
+        beside, [&] { AdvanceFront(context_, false, finest, &fronts); },
+        [&] {
+          // Only where the reverse motion is the same curve (not two turns of exactly half a
+          // revolution, which could go either way round).
+          if (!both_ends || fronts.contact.load() || !SameReversed()) return;
+          CollisionContext& context = context_here();
+          const int64_t before = context.distance_queries();
+          AdvanceFront(context, true, finest, &fronts);
+          if (&context != &context_) *queries_elsewhere += context.distance_queries() - before;
+        });
+    if (fronts.contact.load()) return Advanced{.invalid_at = 0.0};
+    return Advanced{.certified = fronts.Met()};
   }
 
   // The clearance profile: a distance query at each point of the resolution's grid (or its
@@ -376,6 +414,52 @@ class EdgeCheck {
   double invalid_at() const { return invalid_at_; }
 
  private:
+  // Where the two fronts of AdvanceByDirection stand: the one from `from` has shown [0, forward]
+  // free, the one from `to` [backward, 1] (past the far end: 2 and -1).
+  struct Fronts {
+    std::atomic<double> forward{0.0};
+    std::atomic<double> backward{1.0};
+    std::atomic<bool> contact{false};  // `from` in contact: the motion is invalid
+    bool Met() const { return forward.load() >= backward.load(); }
+  };
+
+  // One front of AdvanceByDirection, on `context` (the running thread's): from its end of the
+  // motion towards the other, until the fronts meet, `from` is found in contact, or a step would
+  // be shorter than `finest` (it stalls there). The front from `from` goes on a little past
+  // `to`, so that it covers the end state too; the one from `to` likewise past `from`.
+  void AdvanceFront(CollisionContext& context, bool backward, double finest, Fronts* fronts) const {
+    constexpr double kPastEnd = 1.001;
+    std::atomic<double>& mine = backward ? fronts->backward : fronts->forward;
+    const Config& target = backward ? from_ : to_;
+    double t = backward ? 1.0 : 0.0;
+    Config q = backward ? to_ : from_;
+    while (!fronts->Met() && !fronts->contact.load()) {
+      if (cancel_ != nullptr) cancel_->ThrowIfStopped();
+      const double s = context.FreeFraction(q, target, kPastEnd);
+      if (s > 1) {
+        mine.store(backward ? -1.0 : 2.0);
+        return;
+      }
+      if (s <= 0 && !backward && t == 0) {
+        fronts->contact.store(true);
+        return;
+      }
+      const double step = kMargin * s * (backward ? t : 1 - t);
+      if (step < finest) return;
+      t = backward ? t - step : t + step;
+      mine.store(t);
+      q = At(t);
+    }
+  }
+
+  // Whether the motion from `to` back to `from` passes where this one does (its midpoint; the
+  // tolerance is far above the rounding of a rotation's distance, far below half a turn).
+  bool SameReversed() const {
+    const Config there = At(0.5);
+    const Config back = space_.Interpolate(to_, from_, 0.5);
+    return space_.Distance(there, back) <= 1e-6 * (1 + space_.Distance(from_, to_));
+  }
+
   const Space& space_;
   const std::vector<int>& body_component_;
   const RobotReach& reach_;
@@ -395,6 +479,8 @@ class EdgeCheck {
   // it alone with advancement's margin (0.999) to spare.
   static constexpr double kCapMargin = 1.01;
   static constexpr int64_t kCancelStride = 16;
+  // Fewer interior samples than this are not shared with another thread (FirstInvalidSample).
+  static constexpr int kShareSamples = 8;
   bool certified_ = true;
   double invalid_at_ = -1;
   int64_t bound_queries_ = 0;
@@ -462,9 +548,18 @@ EdgeReport LocalPlanner::CheckEdge(const EdgeCheckRequest& request) const {
   const int64_t queries_before = context.distance_queries();
   EdgeReport report;
   report.length = s.Distance(from, to);
+  // A certificate's second front may run on another thread (EdgeCheckRequest::threads), on that
+  // thread's context.
+  const bool beside = request.threads > 1;
+  const std::function<CollisionContext&()> context_here = [this]() -> CollisionContext& {
+    return impl_->Context(*world_);
+  };
+  std::atomic<int64_t> checks_elsewhere{0};
+  std::atomic<int64_t> queries_elsewhere{0};
   const auto finish = [&]() {
-    report.collision_checks = context.collision_checks() - checks_before;
-    report.distance_queries = context.distance_queries() - queries_before;
+    report.collision_checks = context.collision_checks() - checks_before + checks_elsewhere.load();
+    report.distance_queries =
+        context.distance_queries() - queries_before + queries_elsewhere.load();
     impl_->collision_checks += report.collision_checks;
     impl_->distance_queries += report.distance_queries;
     return report;
@@ -484,18 +579,23 @@ EdgeReport LocalPlanner::CheckEdge(const EdgeCheckRequest& request) const {
   EdgeCheck check(s, impl_->body_component, impl_->reach, context, from, to, request.cancel,
                   nullptr, nullptr, 0, false, options_.warm_start);
   if (!request.known.samples_valid) {
-    const double t = check.FirstInvalidSample(segments, request.known);
+    const double t =
+        check.FirstInvalidSample(segments, request.known, beside, context_here, &checks_elsewhere);
     if (t >= 0) return invalid(t);
   }
   report.state = EdgeState::kValid;
   if (request.proof == EdgeProof::kSamples) return finish();
+  const auto by_direction = [&](EdgeCheck& advance) {
+    return advance.AdvanceByDirection(segments, options_.advance_from_both_ends, beside,
+                                      context_here, &queries_elsewhere);
+  };
   if (request.proof != EdgeProof::kProfile) {
     EdgeCheck advance(s, impl_->body_component, impl_->reach, context, from, to, request.cancel,
                       options_.clearance_bound.get(), &impl_->bound_queries,
                       options_.certificate_rel_err, options_.certificate_threshold,
                       options_.warm_start);
     const EdgeCheck::Advanced advanced = options_.direction_bound && world_->CanAdvance()
-                                             ? advance.AdvanceByDirection(segments)
+                                             ? by_direction(advance)
                                              : advance.Advance(segments);
     if (advanced.invalid_at >= 0) return invalid(advanced.invalid_at);
     if (advanced.certified) {
@@ -515,7 +615,7 @@ EdgeReport LocalPlanner::CheckEdge(const EdgeCheckRequest& request) const {
     // The profile's stretches did not add up; advancement along the separating directions may
     // still certify the motion (a slide along a wall), as it does without a profile.
     EdgeCheck advance(s, impl_->body_component, impl_->reach, context, from, to, request.cancel);
-    report.certified = advance.AdvanceByDirection(segments).certified;
+    report.certified = by_direction(advance).certified;
   }
   return finish();
 }

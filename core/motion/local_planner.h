@@ -18,8 +18,10 @@
 // no pair of bodies is checked against each other, certificates advance instead by how far the
 // rest of the motion is free along the directions that separate the robot from the obstacles
 // (CollisionContext::FreeFraction), and a profile whose stretches do not add up is certified that
-// way: a motion sliding along an obstacle is not held to steps of its clearance. The text below
-// is the certificate elsewhere, or with the option off.
+// way: a motion sliding along an obstacle is not held to steps of its clearance. It advances from
+// both ends (LocalPlannerOptions::advance_from_both_ends), so that a motion that starts next to
+// an obstacle and leaves it is certified from its far end. The text below is the certificate
+// elsewhere, or with the option off.
 //
 // With a clearance bound (LocalPlannerOptions::clearance_bound, core/distance), the certificate
 // of the modes that keep no profile (kCertified, kCertifiedQuick, kCertifiedOfValid) takes the
@@ -72,6 +74,12 @@ struct LocalPlannerOptions {
   // whose stretches do not add up is certified this way too. Elsewhere, or false: the two-sided
   // advancement on clearances above, and the profile's own certificate.
   bool direction_bound = true;
+  // The advancement along the separating directions runs from both ends of the motion, and
+  // certifies it where the two fronts meet: a motion that leaves an obstacle it nearly touches
+  // is certified from its other end. The second front runs only where the first stalls, or
+  // beside it on a thread the caller's loop leaves idle (EdgeCheckRequest::threads). False:
+  // from the start only.
+  bool advance_from_both_ends = true;
 };
 
 // The clearance bound of a world (a distance field sampled on `threads` threads, 0: all cores,

@@ -143,7 +143,7 @@ def test_partial_shortcuts_leave_a_space_of_one_part_alone(client):
     plain = client.merge(input_paths()).result
     partial = client.merge(input_paths(), partial_shortcuts=True).result
     assert partial.path == plain.path
-    assert partial.stats.collision_checks == plain.stats.collision_checks
+    assert partial.stats.edges_checked == plain.stats.edges_checked
 
 
 def test_progress_paths_stream_the_best_path_so_far(client):

@@ -235,6 +235,98 @@ TEST(FreeMotionTest, DirectionCertificatesAreExactCertificates) {
   }
 }
 
+// Certificates from both ends (LocalPlannerOptions::advance_from_both_ends), on random motions
+// and on motions that start next to an obstacle (as a shortened path's corners do): the verdict
+// is the same either way along a motion, as from the start alone it need not be; what the start
+// alone certifies is certified; what is certified is free at 100 points; and sharing the check
+// with a second thread (EdgeCheckRequest::threads) changes no verdict.
+TEST(FreeMotionTest, CertificatesFromBothEndsDoNotDependOnTheDirection) {
+  int asymmetric_one_end = 0;
+  for (const MeshProblem& p : MeshProblems()) {
+    SCOPED_TRACE(p.name);
+    const auto world = LoadWorld(p);
+    if (!world->CanAdvance()) continue;
+    const Space& space = world->space();
+    const LocalPlanner exact(world, {.direction_bound = false});
+    const LocalPlanner one_end(world, {.advance_from_both_ends = false});
+    const LocalPlanner both_ends(world);
+    std::mt19937_64 rng(17);
+    int motions = 0;
+    int certified = 0;
+    int certified_one = 0;
+    while (motions < 60) {
+      const Config free = space.Sample(rng);
+      const Config other = space.Sample(rng);
+      if (exact.Clearance(free) <= 0) continue;
+      Config start = free;
+      if (motions % 2 == 1) {
+        // Pushed towards the other point until it nearly touches what lies between.
+        if (exact.Clearance(other) > 0) continue;
+        double lo = 0;
+        double hi = 1;
+        for (int k = 0; k < 20; ++k) {
+          const double mid = 0.5 * (lo + hi);
+          (exact.Clearance(space.Interpolate(free, other, mid)) > 0 ? lo : hi) = mid;
+        }
+        start = space.Interpolate(free, other, lo);
+      }
+      const Config to = space.Interpolate(start, space.Sample(rng), motions % 3 == 0 ? 1.0 : 0.1);
+      if (exact.Clearance(to) <= 0) continue;
+      ++motions;
+      const auto check = [&](const LocalPlanner& planner, const Config& a, const Config& b,
+                             int threads) {
+        return planner.CheckEdge(
+            {.from = &a, .to = &b, .proof = EdgeProof::kCertificateOrGiveUp, .threads = threads});
+      };
+      const EdgeReport one = check(one_end, start, to, 1);
+      const EdgeReport one_back = check(one_end, to, start, 1);
+      const EdgeReport both = check(both_ends, start, to, 1);
+      const EdgeReport both_back = check(both_ends, to, start, 1);
+      const EdgeReport beside = check(both_ends, start, to, 2);
+      ASSERT_EQ(one.state, both.state) << "motion " << motions;
+      ASSERT_EQ(both.state, beside.state) << "motion " << motions;
+      EXPECT_EQ(both.certified, both_back.certified) << "motion " << motions;
+      EXPECT_EQ(both.certified, beside.certified) << "motion " << motions;
+      if (one.certified || one_back.certified) {
+        EXPECT_TRUE(both.certified) << "motion " << motions;
+      }
+      asymmetric_one_end += one.certified != one_back.certified;
+      certified += both.certified;
+      certified_one += one.certified;
+      if (!both.certified) continue;
+      for (int k = 0; k <= 100; ++k) {
+        ASSERT_GT(exact.Clearance(space.Interpolate(start, to, k / 100.0)), 0)
+            << "motion " << motions << " at " << k / 100.0;
+      }
+    }
+    EXPECT_GT(certified, 5);
+    std::printf("%s: of %d motions, %d certified from both ends, %d from the start alone\n",
+                p.name.c_str(), motions, certified, certified_one);
+  }
+  std::printf("%d motions certified from one end and not from the other\n", asymmetric_one_end);
+}
+
+// Sharing the samples of a motion with a second thread finds the same first sample in collision.
+TEST(FreeMotionTest, SharedSamplesFindTheSameFirstCollision) {
+  const MeshProblem p = MeshProblems()[3];
+  const auto world = LoadWorld(p);
+  const LocalPlanner planner(world);
+  std::mt19937_64 rng(23);
+  int invalid = 0;
+  for (int i = 0; i < 200; ++i) {
+    const Config a = world->space().Sample(rng);
+    const Config b = world->space().Sample(rng);
+    EdgeCheckRequest request{.from = &a, .to = &b, .proof = EdgeProof::kSamples};
+    const EdgeReport alone = planner.CheckEdge(request);
+    request.threads = 2;
+    const EdgeReport shared = planner.CheckEdge(request);
+    ASSERT_EQ(alone.state, shared.state) << "motion " << i;
+    EXPECT_EQ(alone.invalid_at, shared.invalid_at) << "motion " << i;
+    invalid += alone.state == EdgeState::kInvalid && alone.invalid_at > 0 && alone.invalid_at < 1;
+  }
+  EXPECT_GT(invalid, 5);
+}
+
 // A default merge of the bench's fixed home inputs with the direction bound: its path passes
 // CheckPaths on the exact checker, certified, keeps the endpoints and is no longer than the
 // best input.

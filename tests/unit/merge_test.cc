@@ -1076,8 +1076,11 @@ TEST_F(MergeTest, ThreadCountDoesNotChangeTheResult) {
   const MergeResult one = Merge(planner, MergeRequest{.paths = inputs, .options = {.threads = 1}});
   const MergeResult two = Merge(planner, MergeRequest{.paths = inputs, .options = {.threads = 2}});
   EXPECT_DOUBLE_EQ(one.quality.length, two.quality.length);
+  EXPECT_EQ(one.path.waypoints, two.path.waypoints);
   EXPECT_EQ(one.stats.edges_valid, two.stats.edges_valid);
-  EXPECT_EQ(one.stats.collision_checks, two.stats.collision_checks);
+  // The same motions are checked; how many samples a check shared by two threads takes past its
+  // answer (EdgeCheckRequest::threads) depends on their timing.
+  EXPECT_EQ(one.stats.edges_checked, two.stats.edges_checked);
 }
 
 }  // namespace

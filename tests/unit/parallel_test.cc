@@ -70,5 +70,52 @@ TEST(ParallelForTest, LoopsOfSeveralCallersAtOnceFinish) {
   for (const auto& r : results) EXPECT_EQ(r, std::vector<int>(300, 1));
 }
 
+// RunBeside runs both halves once and returns after both; without `beside` in order, in the
+// calling thread; an exception of either reaches the caller.
+TEST(RunBesideTest, RunsBothHalves) {
+  for (const bool beside : {false, true}) {
+    for (int round = 0; round < 200; ++round) {
+      std::atomic<int> first{0};
+      std::atomic<int> second{0};
+      std::vector<int> order;
+      RunBeside(
+          beside,
+          [&] {
+            first.fetch_add(1);
+            if (!beside) order.push_back(1);
+          },
+          [&] {
+            second.fetch_add(1);
+            if (!beside) order.push_back(2);
+          });
+      ASSERT_EQ(first.load(), 1);
+      ASSERT_EQ(second.load(), 1);
+      if (!beside) {
+        EXPECT_EQ(order, (std::vector<int>{1, 2}));
+      }
+    }
+  }
+}
+
+TEST(RunBesideTest, AnExceptionOfEitherHalfReachesTheCaller) {
+  for (const bool beside : {false, true}) {
+    std::atomic<bool> second_done{false};
+    EXPECT_THROW(
+        RunBeside(
+            beside, [] { throw std::runtime_error("first"); }, [&] { second_done = true; }),
+        std::runtime_error);
+    EXPECT_THROW(RunBeside(
+                     beside, [] {}, [] { throw std::runtime_error("second"); }),
+                 std::runtime_error);
+  }
+  // Inside a loop's body, as a local planner's check runs.
+  std::vector<std::atomic<int>> halves(64);
+  ParallelFor(2, 32, [&](size_t i) {
+    RunBeside(
+        true, [&] { halves[2 * i].fetch_add(1); }, [&] { halves[2 * i + 1].fetch_add(1); });
+  });
+  for (const auto& h : halves) EXPECT_EQ(h.load(), 1);
+}
+
 }  // namespace
 }  // namespace hgraph
