@@ -286,14 +286,10 @@ class EdgeCheck {
         return;
       }
     };
-    RunBeside(
-        beside && segments >= kShareSamples, [&] { scan(context_); },
-        [&] {
-          CollisionContext& context = context_here();
-          const int64_t before = context.collision_checks();
-          scan(context);
-          if (&context != &context_) *checks_elsewhere += context.collision_checks() - before;
-        });
+    const auto share = [&] {
+      OnThisThread(context_here, checks_elsewhere, &CollisionContext::collision_checks, scan);
+    };
+    RunBeside(beside && segments >= kShareSamples, share, share);
     const size_t found = first_invalid.load();
     return found < order.size() ? static_cast<double>(order[found]) / segments : -1;
   }
@@ -358,15 +354,19 @@ class EdgeCheck {
     const double finest = Finest(segments);
     Fronts fronts;
     RunBeside(
-        beside, [&] { AdvanceFront(context_, false, finest, &fronts); },
+        beside,
+        [&] {
+          OnThisThread(
+              context_here, queries_elsewhere, &CollisionContext::distance_queries,
+              [&](CollisionContext& context) { AdvanceFront(context, false, finest, &fronts); });
+        },
         [&] {
           // Only where the reverse motion is the same curve (not two turns of exactly half a
           // revolution, which could go either way round).
           if (!both_ends || fronts.contact.load() || !SameReversed()) return;
-          CollisionContext& context = context_here();
-          const int64_t before = context.distance_queries();
-          AdvanceFront(context, true, finest, &fronts);
-          if (&context != &context_) *queries_elsewhere += context.distance_queries() - before;
+          OnThisThread(
+              context_here, queries_elsewhere, &CollisionContext::distance_queries,
+              [&](CollisionContext& context) { AdvanceFront(context, true, finest, &fronts); });
         });
     if (fronts.contact.load()) return Advanced{.invalid_at = 0.0};
     return Advanced{.certified = fronts.Met()};
@@ -450,6 +450,18 @@ class EdgeCheck {
       mine.store(t);
       q = At(t);
     }
+  }
+
+  // Runs work(context) on the context of the thread running it (`context_here`); where that is
+  // not this check's own context, adds what `count` counted there to `elsewhere`.
+  template <class Work>
+  void OnThisThread(const std::function<CollisionContext&()>& context_here,
+                    std::atomic<int64_t>* elsewhere, int64_t (CollisionContext::*count)() const,
+                    const Work& work) const {
+    CollisionContext& context = context_here();
+    const int64_t before = (context.*count)();
+    work(context);
+    if (&context != &context_) *elsewhere += (context.*count)() - before;
   }
 
   // Whether the motion from `to` back to `from` passes where this one does (its midpoint; the
