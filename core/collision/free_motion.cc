@@ -51,7 +51,7 @@ class Advancer {
     if (d <= 0) return 0;
     // p and q are in the moving rectangle's frame; q - p is the separating direction.
     const Eigen::Vector3d n = (a.rss.axis * (q - p)).normalized();
-    const double speed = screw_.translation.dot(n) + screw_.angle * *rho;
+    const double speed = screw_.translation.dot(n) + screw_.angle * *rho * screw_.Across(n);
     return speed > 0 ? d / speed : kInfinity;
   }
 
@@ -101,7 +101,8 @@ class Advancer {
       Set(0, m_id, o_id);
       return;
     }
-    const double speed = screw_.translation.dot((q - p) / d) + screw_.angle * rho;
+    const Eigen::Vector3d n = (q - p) / d;
+    const double speed = screw_.translation.dot(n) + screw_.angle * rho * screw_.Across(n);
     if (speed > 0 && d / speed < best_) Set(d / speed, m_id, o_id);
   }
 
@@ -127,6 +128,10 @@ class Advancer {
 
 double Screw::Reach(const Eigen::Vector3d& m) const {
   return radial ? (m - center).norm() : axis.cross(m - center).norm();
+}
+
+double Screw::Across(const Eigen::Vector3d& n) const {
+  return radial ? 1.0 : std::min(1.0, (n - n.dot(axis) * axis).norm());
 }
 
 double MeshReach(const MeshModel& mesh, const Screw& screw) {

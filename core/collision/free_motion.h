@@ -4,19 +4,20 @@
 //
 // The motion is a screw: in the moving mesh's frame at s = 0, a point m is at
 //   center + AngleAxis(s * angle, axis) * (m - center) + s * translation.
-// Its velocity is translation + angle * axis x (the point's offset from the axis line, turned), so
-// along a fixed unit vector n a point that starts at distance rho from the axis line moves at most
-//   s * (translation . n + angle * rho)
-// over s. Two convex sets whose nearest points are P (moving) and Q (static) lie on either side of
-// the planes through P and Q normal to n = (Q - P) / |Q - P|: the moving set cannot reach the
-// static one before that bound reaches |Q - P|. Bounding volumes give such a lower bound for every
-// pair of triangles beneath them, with rho bounded over the volume, and prune the pairs whose
-// bound is no lower than the least found so far: the answer is the least bound of a pair of
-// triangles at their places at s = 0. A caller advances the robot by it and asks again from
-// there (conservative advancement, one step per query: advancing every pair of triangles further
-// within one query cost more than the queries it saved on the bench's real-size meshes). Unlike a
-// bound by how far any point moves (|translation| + angle * radius), a motion that slides along
-// an obstacle, or away from it, is not held back by it.
+// Its velocity is translation + angle * axis x (the point's offset from the axis line, turned): the
+// turn's part is perpendicular to the axis and rho * angle long, so along a fixed unit vector n a
+// point that starts at distance rho from the axis line moves at most
+//   s * (translation . n + angle * rho * |n - (n . axis) axis|)
+// over s (a turn about n itself moves nothing along n). Two convex sets whose nearest points are P
+// (moving) and Q (static) lie on either side of the planes through P and Q normal to n = (Q - P) /
+// |Q - P|: the moving set cannot reach the static one before that bound reaches |Q - P|. Bounding
+// volumes give such a lower bound for every pair of triangles beneath them, with rho bounded over
+// the volume, and prune the pairs whose bound is no lower than the least found so far: the answer
+// is the least bound of a pair of triangles at their places at s = 0. A caller advances the robot
+// by it and asks again from there (conservative advancement, one step per query: advancing every
+// pair of triangles further within one query cost more than the queries it saved on the bench's
+// real-size meshes). Unlike a bound by how far any point moves (|translation| + angle * radius), a
+// motion that slides along an obstacle, or away from it, is not held back by it.
 #pragma once
 
 #include <fcl/geometry/bvh/BVH_model.h>
@@ -40,6 +41,10 @@ struct Screw {
   // How far the point m (at s = 0) is from what the turn moves it about: the axis line, or the
   // center when radial.
   double Reach(const Eigen::Vector3d& m) const;
+  // How much of the turn's speed a unit direction n can see: a point at Reach rho from the axis
+  // moves at angle * rho across the axis, so along n at most angle * rho * |n across the axis|
+  // (1 when radial).
+  double Across(const Eigen::Vector3d& n) const;
 };
 
 // The largest Reach over the mesh's vertices.
