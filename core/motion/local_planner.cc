@@ -286,10 +286,15 @@ class EdgeCheck {
         return;
       }
     };
-    const auto share = [&] {
-      OnThisThread(context_here, checks_elsewhere, &CollisionContext::collision_checks, scan);
-    };
-    RunBeside(beside && segments >= kShareSamples, share, share);
+    if (beside && segments >= kShareSamples) {
+      const auto share = [&] {
+        OnThisThread(true, context_here, checks_elsewhere, &CollisionContext::collision_checks,
+                     scan);
+      };
+      RunBeside(true, share, share);
+    } else {
+      scan(context_);
+    }
     const size_t found = first_invalid.load();
     return found < order.size() ? static_cast<double>(order[found]) / segments : -1;
   }
@@ -357,7 +362,7 @@ class EdgeCheck {
         beside,
         [&] {
           OnThisThread(
-              context_here, queries_elsewhere, &CollisionContext::distance_queries,
+              beside, context_here, queries_elsewhere, &CollisionContext::distance_queries,
               [&](CollisionContext& context) { AdvanceFront(context, false, finest, &fronts); });
         },
         [&] {
@@ -365,7 +370,7 @@ class EdgeCheck {
           // revolution, which could go either way round).
           if (!both_ends || fronts.contact.load() || !SameReversed()) return;
           OnThisThread(
-              context_here, queries_elsewhere, &CollisionContext::distance_queries,
+              beside, context_here, queries_elsewhere, &CollisionContext::distance_queries,
               [&](CollisionContext& context) { AdvanceFront(context, true, finest, &fronts); });
         });
     if (fronts.contact.load()) return Advanced{.invalid_at = 0.0};
@@ -452,13 +457,14 @@ class EdgeCheck {
     }
   }
 
-  // Runs work(context) on the context of the thread running it (`context_here`); where that is
-  // not this check's own context, adds what `count` counted there to `elsewhere`.
+  // Runs work(context) on the context of the thread running it: this check's own in the calling
+  // thread (`shared` false), else `context_here`'s, and where that is not this check's own, adds
+  // what `count` counted there to `elsewhere`.
   template <class Work>
-  void OnThisThread(const std::function<CollisionContext&()>& context_here,
+  void OnThisThread(bool shared, const std::function<CollisionContext&()>& context_here,
                     std::atomic<int64_t>* elsewhere, int64_t (CollisionContext::*count)() const,
                     const Work& work) const {
-    CollisionContext& context = context_here();
+    CollisionContext& context = shared ? context_here() : context_;
     const int64_t before = (context.*count)();
     work(context);
     if (&context != &context_) *elsewhere += (context.*count)() - before;

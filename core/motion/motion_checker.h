@@ -106,9 +106,9 @@ struct EdgeCheckRequest {
   // Stops a long check (an edge of many samples at a fine resolution) between samples: CheckEdge
   // throws the token's error (ThrowIfStopped) once it is stopped. May be null.
   const CancelToken* cancel = nullptr;
-  // Threads of the caller's loop that this check may share when they fall idle (the second front
-  // of a certificate, LocalPlannerOptions::direction_bound); 1: the calling thread alone. The
-  // report is the same either way, but for what it counts.
+  // Threads of the caller's loop that this check may share when they fall idle (its samples, the
+  // second front of a certificate, LocalPlannerOptions::direction_bound); 1: the calling thread
+  // alone. The report is the same either way, but for what it counts.
   int threads = 1;
 };
 
