@@ -103,8 +103,9 @@ struct Candidate {
   double gain = 0;
   std::vector<EdgeReport> reports;
   bool free = false;
-  // Valid at its samples, its certificates not yet asked for (Shortening::CheckBatch).
+  // Valid at its samples, its certificates not yet asked for (Shortening::CheckCandidates).
   bool at_samples = false;
+  bool checked = false;  // CheckCandidates has run on it
 };
 
 // One call of ShortcutCertified: the request, and the path being shortened (the result's path,
@@ -163,12 +164,13 @@ class Shortening {
   // The partial shortcut of `c` moving `part` straight from c.a to c.b (its points), and its
   // length; `along` is the path's length from a to b.
   double Partial(const Space::Part& part, double along, Candidate* c) const;
-  // Checks each candidate's motions in order, up to the first not proven free; with
+  // Checks the motions of the candidates `which` in order, up to the first not proven free; with
   // certificates, at their samples only (Candidate::at_samples), for TakeFromBatch to certify.
-  void CheckBatch(std::vector<Candidate>* batch);
+  void CheckCandidates(std::vector<Candidate>* batch, const std::vector<size_t>& which);
   // The free candidates that gain most, no two sharing an edge of the path, from the path's end
-  // backwards (so that applying them in turn keeps the others' edge indices valid). Certifies
-  // the candidates valid at their samples that would be taken, until every one it takes is free.
+  // backwards (so that applying them in turn keeps the others' edge indices valid). Checks the
+  // candidates that would be taken, then certifies those valid at their samples, until every
+  // one it takes is free.
   std::vector<size_t> TakeFromBatch(std::vector<Candidate>* batch);
   // Replaces the stretch of the path between c.a and c.b by the candidate's motions.
   void Splice(Candidate& c);
@@ -321,7 +323,6 @@ void Shortening::TryRandomPairs() {
     if (PathLength(edges_) <= 0) break;
     std::vector<Candidate> batch = DrawBatch(attempts, &attempt);
     if (batch.empty()) continue;
-    CheckBatch(&batch);
     for (size_t k : TakeFromBatch(&batch)) Splice(batch[k]);
   }
 }
@@ -391,13 +392,12 @@ double Shortening::Partial(const Space::Part& part, double along, Candidate* c) 
   return cost + space_.Distance(*previous, c->b);
 }
 
-void Shortening::CheckBatch(std::vector<Candidate>* batch) {
-  // With certificates the samples come first: a batch holds candidates valid at their samples
-  // that overlap a better one, and only those taken need a certificate (TakeFromBatch). What it
-  // takes is what certifying every candidate would take.
+void Shortening::CheckCandidates(std::vector<Candidate>* batch, const std::vector<size_t>& which) {
+  // With certificates the samples come first: only the candidates the batch would take need a
+  // certificate (TakeFromBatch).
   const bool samples_first = GivesUp();
-  ParallelFor(threads_, batch->size(), [&](size_t k) {
-    Candidate& c = (*batch)[k];
+  ParallelFor(threads_, which.size(), [&](size_t i) {
+    Candidate& c = (*batch)[which[i]];
     for (size_t j = 0; j <= c.points.size(); ++j) {
       if (cancel_.stopped()) return;
       const Config& from = j == 0 ? c.a : c.points[j - 1];
@@ -412,7 +412,9 @@ void Shortening::CheckBatch(std::vector<Candidate>* batch) {
     (samples_first ? c.at_samples : c.free) = true;
   });
   cancel_.ThrowIfStopped();
-  for (const Candidate& c : *batch) out_.edges_checked += static_cast<int64_t>(c.reports.size());
+  for (size_t k : which) {
+    out_.edges_checked += static_cast<int64_t>((*batch)[k].reports.size());
+  }
 }
 
 std::vector<size_t> Shortening::TakeFromBatch(std::vector<Candidate>* batch) {
@@ -423,18 +425,32 @@ std::vector<size_t> Shortening::TakeFromBatch(std::vector<Candidate>* batch) {
                    [&](size_t x, size_t y) { return b[x].gain > b[y].gain; });
   std::vector<size_t> taken;
   for (;;) {
-    // The best candidates free or valid at their samples, no two overlapping; those at their
-    // samples are certified, and the choice is made again without any that failed.
+    // The best candidates not known to fail, no two overlapping. Those not checked yet are
+    // checked (at their samples, with certificates), then those valid at their samples are
+    // certified, and the choice is made again without any that failed. It ends with the choice
+    // checking every candidate first would make, the best free ones first, but checks only
+    // those that some choice on the way would take: a candidate that overlaps a better free one
+    // is never checked.
     taken.clear();
+    std::vector<size_t> to_check;
     std::vector<size_t> to_certify;
     for (size_t k : order) {
-      if (!b[k].free && !b[k].at_samples) continue;
+      if (b[k].checked && !b[k].free && !b[k].at_samples) continue;
       const bool overlaps = std::any_of(taken.begin(), taken.end(), [&](size_t o) {
         return !(b[k].e1 < b[o].e0 || b[o].e1 < b[k].e0);
       });
       if (overlaps) continue;
       taken.push_back(k);
-      if (b[k].at_samples) to_certify.push_back(k);
+      if (!b[k].checked) {
+        to_check.push_back(k);
+      } else if (b[k].at_samples) {
+        to_certify.push_back(k);
+      }
+    }
+    if (!to_check.empty()) {
+      CheckCandidates(batch, to_check);
+      for (size_t k : to_check) b[k].checked = true;
+      continue;
     }
     if (to_certify.empty()) break;
     ParallelFor(threads_, to_certify.size(), [&](size_t i) {

@@ -355,7 +355,8 @@ class EdgeCheck {
   // first front alone.
   Advanced AdvanceByDirection(int segments, bool both_ends, bool beside,
                               const std::function<CollisionContext&()>& context_here,
-                              std::atomic<int64_t>* queries_elsewhere) {
+                              std::atomic<int64_t>* queries_elsewhere,
+                              std::atomic<int64_t>* checks_elsewhere) {
     const double finest = Finest(segments);
     Fronts fronts;
     RunBeside(
@@ -364,16 +365,25 @@ class EdgeCheck {
           OnThisThread(
               beside, context_here, queries_elsewhere, &CollisionContext::distance_queries,
               [&](CollisionContext& context) { AdvanceFront(context, false, finest, &fronts); });
+          if (!fronts.Met() && !fronts.contact.load()) {
+            OnThisThread(beside, context_here, checks_elsewhere,
+                         &CollisionContext::collision_checks,
+                         [&](CollisionContext& context) { ProbeStall(context, finest, &fronts); });
+          }
         },
         [&] {
           // Only where the reverse motion is the same curve (not two turns of exactly half a
           // revolution, which could go either way round).
-          if (!both_ends || fronts.contact.load() || !SameReversed()) return;
+          if (!both_ends || fronts.contact.load() || fronts.collides.load() >= 0 ||
+              !SameReversed()) {
+            return;
+          }
           OnThisThread(
               beside, context_here, queries_elsewhere, &CollisionContext::distance_queries,
               [&](CollisionContext& context) { AdvanceFront(context, true, finest, &fronts); });
         });
     if (fronts.contact.load()) return Advanced{.invalid_at = 0.0};
+    if (fronts.collides.load() >= 0) return Advanced{.invalid_at = fronts.collides.load()};
     return Advanced{.certified = fronts.Met()};
   }
 
@@ -424,7 +434,8 @@ class EdgeCheck {
   struct Fronts {
     std::atomic<double> forward{0.0};
     std::atomic<double> backward{1.0};
-    std::atomic<bool> contact{false};  // `from` in contact: the motion is invalid
+    std::atomic<bool> contact{false};    // `from` in contact: the motion is invalid
+    std::atomic<double> collides{-1.0};  // where ProbeStall found the motion in collision
     bool Met() const { return forward.load() >= backward.load(); }
   };
 
@@ -438,7 +449,7 @@ class EdgeCheck {
     const Config& target = backward ? from_ : to_;
     double t = backward ? 1.0 : 0.0;
     Config q = backward ? to_ : from_;
-    while (!fronts->Met() && !fronts->contact.load()) {
+    while (!fronts->Met() && !fronts->contact.load() && fronts->collides.load() < 0) {
       if (cancel_ != nullptr) cancel_->ThrowIfStopped();
       const double s = context.FreeFraction(q, target, kPastEnd);
       if (s > 1) {
@@ -454,6 +465,23 @@ class EdgeCheck {
       t = backward ? t - step : t + step;
       mine.store(t);
       q = At(t);
+    }
+  }
+
+  // After the front from `from` stalled at t: collision checks at t + finest * 2^j, j = 0, 1,
+  // ..., short of `to`. A motion that stalls because it runs into an obstacle (rather than
+  // grazing one) is in collision just past where its front stalls, and one found there makes the
+  // second front needless. Where the checks go depends on t alone, so the verdict does not
+  // depend on the second front's progress.
+  void ProbeStall(CollisionContext& context, double finest, Fronts* fronts) const {
+    const double stalled = fronts->forward.load();
+    for (double offset = finest; stalled + offset < 1 && !fronts->Met(); offset *= 2) {
+      if (cancel_ != nullptr) cancel_->ThrowIfStopped();
+      const double t = stalled + offset;
+      if (!context.Valid(At(t))) {
+        fronts->collides.store(t);
+        return;
+      }
     }
   }
 
@@ -605,7 +633,7 @@ EdgeReport LocalPlanner::CheckEdge(const EdgeCheckRequest& request) const {
   if (request.proof == EdgeProof::kSamples) return finish();
   const auto by_direction = [&](EdgeCheck& advance) {
     return advance.AdvanceByDirection(segments, options_.advance_from_both_ends, beside,
-                                      context_here, &queries_elsewhere);
+                                      context_here, &queries_elsewhere, &checks_elsewhere);
   };
   if (request.proof != EdgeProof::kProfile) {
     EdgeCheck advance(s, impl_->body_component, impl_->reach, context, from, to, request.cancel,

@@ -306,6 +306,54 @@ TEST(FreeMotionTest, CertificatesFromBothEndsDoNotDependOnTheDirection) {
   std::printf("%d motions certified from one end and not from the other\n", asymmetric_one_end);
 }
 
+// A certificate whose first front stalls because the motion runs into an obstacle between its
+// samples is answered by collision checks just past the stall: the motion is reported invalid at
+// a state that collides, the same with a second thread, and the second front is not run.
+TEST(FreeMotionTest, AStallIntoAnObstacleIsFoundInCollision) {
+  int found = 0;
+  for (const MeshProblem& p : MeshProblems()) {
+    SCOPED_TRACE(p.name);
+    const auto world = LoadWorld(p);
+    if (!world->CanAdvance()) continue;
+    const Space& space = world->space();
+    // Samples five times sparser than the default, so that more motions collide between them.
+    const LocalPlanner planner(world, {.resolution = 0.05});
+    std::mt19937_64 rng(29);
+    for (int i = 0; i < 600; ++i) {
+      // From a free state pushed towards a state in collision until it nearly touches what lies
+      // between, a short way on.
+      const Config free = space.Sample(rng);
+      const Config other = space.Sample(rng);
+      if (!planner.IsValid(free) || planner.IsValid(other)) continue;
+      double lo = 0;
+      double hi = 1;
+      for (int k = 0; k < 20; ++k) {
+        const double mid = 0.5 * (lo + hi);
+        (planner.IsValid(space.Interpolate(free, other, mid)) ? lo : hi) = mid;
+      }
+      const Config a = space.Interpolate(free, other, lo);
+      const Config b = space.Interpolate(a, space.Sample(rng), 0.1);
+      EdgeCheckRequest request{.from = &a, .to = &b, .proof = EdgeProof::kSamples};
+      if (planner.CheckEdge(request).state != EdgeState::kValid) continue;
+      request.proof = EdgeProof::kCertificateOrGiveUp;
+      const EdgeReport alone = planner.CheckEdge(request);
+      request.threads = 2;
+      const EdgeReport shared = planner.CheckEdge(request);
+      ASSERT_EQ(alone.state, shared.state) << "motion " << i;
+      ASSERT_EQ(alone.certified, shared.certified) << "motion " << i;
+      if (alone.state != EdgeState::kInvalid) continue;
+      EXPECT_EQ(alone.invalid_at, shared.invalid_at) << "motion " << i;
+      ASSERT_GT(alone.invalid_at, 0) << "motion " << i;
+      ASSERT_LT(alone.invalid_at, 1) << "motion " << i;
+      EXPECT_FALSE(planner.IsValid(space.Interpolate(a, b, alone.invalid_at))) << "motion " << i;
+      ++found;
+    }
+  }
+  // Motions valid at every sample and found in collision between two of them.
+  EXPECT_GT(found, 8);
+  std::printf("%d motions valid at their samples found in collision past a stalled front\n", found);
+}
+
 // Sharing the samples of a motion with a second thread finds the same first sample in collision.
 TEST(FreeMotionTest, SharedSamplesFindTheSameFirstCollision) {
   const MeshProblem p = MeshProblems()[3];
