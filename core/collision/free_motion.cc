@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <utility>
+#include <vector>
 
 namespace hgraph::free_motion {
 namespace {
@@ -23,7 +24,8 @@ class Advancer {
         obstacle_(obstacle),
         rotation_(obstacle_pose.linear()),
         translation_(obstacle_pose.translation()),
-        best_(best) {}
+        best_(best),
+        rho_(static_cast<size_t>(mesh.getNumBVs()), -1.0) {}
 
   double RunPair(const TrianglePair& pair) {
     Triangles(pair.mesh, pair.obstacle);
@@ -41,10 +43,14 @@ class Advancer {
   // A lower bound on when any triangle under the moving node `m` can touch one under the static
   // node `o` (infinity: never along this motion), and in `rho` the reach bound of node m (at
   // most `parent_rho`). 0 when the volumes overlap at s = 0.
-  double Tau(int m, int o, double parent_rho, double* rho) const {
+  double Tau(int m, int o, double parent_rho, double* rho) {
     const fcl::OBBRSSd& a = mesh_.getBV(m).bv;
     const fcl::OBBRSSd& b = obstacle_.getBV(o).bv;
-    *rho = std::min(parent_rho, screw_.Reach(a.obb.To) + a.obb.extent.norm());
+    // A node's bound depends on its ancestors alone: computed once, whichever static node it
+    // meets.
+    double& known = rho_[static_cast<size_t>(m)];
+    if (known < 0) known = std::min(parent_rho, screw_.Reach(a.obb.To) + a.obb.extent.norm());
+    *rho = known;
     fcl::Vector3d p;
     fcl::Vector3d q;
     const double d = fcl::distance(rotation_, translation_, a, b, &p, &q);
@@ -122,6 +128,8 @@ class Advancer {
   const Eigen::Matrix3d rotation_;
   const Eigen::Vector3d translation_;
   double best_;
+  // Each moving node's reach bound (Tau's rho) once computed; -1 before.
+  std::vector<double> rho_;
 };
 
 }  // namespace
