@@ -152,7 +152,12 @@ class Shortening {
   // The motions joining the neighbours of the waypoints `tried`: reports the caller knows where
   // they settle the question (from_caller), checks otherwise.
   std::vector<EdgeReport> JoinNeighbours(const std::vector<size_t>& tried,
-                                         std::vector<char>* from_caller) const;
+                                         std::vector<char>* from_caller,
+                                         std::vector<char>* at_samples) const;
+  // With certificates JoinNeighbours checks the joins at their samples only (`at_samples`):
+  // certifies those a pass would drop, until every one it would drop is free.
+  void CertifyDrops(const std::vector<size_t>& tried, std::vector<EdgeReport>* joined,
+                    std::vector<char>* at_samples) const;
   // Drops the waypoints `drops` (ascending), each one's two edges replaced by `reports`.
   void Drop(const std::vector<size_t>& drops, std::vector<EdgeReport>* reports,
             std::vector<char>* settled);
@@ -233,7 +238,9 @@ void Shortening::DropWaypoints() {
     }
     if (tried.empty()) break;
     std::vector<char> from_caller;
-    std::vector<EdgeReport> joined = JoinNeighbours(tried, &from_caller);
+    std::vector<char> at_samples;
+    std::vector<EdgeReport> joined = JoinNeighbours(tried, &from_caller, &at_samples);
+    CertifyDrops(tried, &joined, &at_samples);
     std::vector<size_t> drops;
     std::vector<EdgeReport> drop_reports;
     for (size_t k = 0; k < tried.size(); ++k) {
@@ -245,11 +252,12 @@ void Shortening::DropWaypoints() {
         }
       }
       settled[j] = 1;
-      if (!MayTake(joined[k])) continue;
+      if (!MayTake(joined[k]) && !at_samples[k]) continue;
       if (!drops.empty() && drops.back() + 1 == j) {
         settled[j] = 0;  // its left neighbour goes: try again with the new one
         continue;
       }
+      HGRAPH_CHECK(!at_samples[k]);  // CertifyDrops certified every join a pass drops
       drops.push_back(j);
       drop_reports.push_back(std::move(joined[k]));
     }
@@ -258,9 +266,11 @@ void Shortening::DropWaypoints() {
 }
 
 std::vector<EdgeReport> Shortening::JoinNeighbours(const std::vector<size_t>& tried,
-                                                   std::vector<char>* from_caller) const {
+                                                   std::vector<char>* from_caller,
+                                                   std::vector<char>* at_samples) const {
   std::vector<EdgeReport> joined(tried.size());
   from_caller->assign(tried.size(), 0);
+  at_samples->assign(tried.size(), 0);
   for (size_t k = 0; k < tried.size(); ++k) {
     const size_t j = tried[k];
     if (!request_.known || ids_[j - 1] < 0 || ids_[j + 1] < 0) continue;
@@ -286,13 +296,49 @@ std::vector<EdgeReport> Shortening::JoinNeighbours(const std::vector<size_t>& tr
     joined[k] = *known;
     (*from_caller)[k] = 1;
   }
+  // With certificates the samples come first, as in a batch of random pairs: CertifyDrops
+  // certifies those a pass would drop.
+  const bool samples_first = GivesUp();
   ParallelFor(threads_, tried.size(), [&](size_t k) {
     if ((*from_caller)[k] || cancel_.stopped()) return;
     const size_t j = tried[k];
-    joined[k] = CheckMotion(q_[j - 1], q_[j + 1]);
+    if (samples_first) {
+      joined[k] = Check(checker_, q_[j - 1], q_[j + 1], 0, true, threads_, cancel_);
+      (*at_samples)[k] = joined[k].state == EdgeState::kValid;
+    } else {
+      joined[k] = CheckMotion(q_[j - 1], q_[j + 1]);
+    }
   });
   cancel_.ThrowIfStopped();
   return joined;
+}
+
+void Shortening::CertifyDrops(const std::vector<size_t>& tried, std::vector<EdgeReport>* joined,
+                              std::vector<char>* at_samples) const {
+  for (;;) {
+    // The drops a pass makes (left to right, never two neighbours) among the joins free or
+    // valid at their samples; those at their samples are certified, and the choice is made
+    // again without any that failed. It ends with the drops certifying every join first would
+    // make, without the certificates of joins beside a drop (checked again in the next pass,
+    // against the new neighbour).
+    std::vector<size_t> to_certify;
+    size_t last_drop = 0;
+    for (size_t k = 0; k < tried.size(); ++k) {
+      if (!(*at_samples)[k] && !MayTake((*joined)[k])) continue;
+      if (last_drop > 0 && last_drop + 1 == tried[k]) continue;
+      last_drop = tried[k];
+      if ((*at_samples)[k]) to_certify.push_back(k);
+    }
+    if (to_certify.empty()) return;
+    ParallelFor(threads_, to_certify.size(), [&](size_t i) {
+      if (cancel_.stopped()) return;
+      const size_t k = to_certify[i];
+      const size_t j = tried[k];
+      (*joined)[k] = Certify(checker_, q_[j - 1], q_[j + 1], (*joined)[k], threads_, cancel_);
+    });
+    cancel_.ThrowIfStopped();
+    for (size_t k : to_certify) (*at_samples)[k] = 0;
+  }
 }
 
 void Shortening::Drop(const std::vector<size_t>& drops, std::vector<EdgeReport>* reports,
