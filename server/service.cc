@@ -170,6 +170,10 @@ std::shared_ptr<PathMergerService::StoredHGraph> PathMergerService::LoadHGraph(
   stored->fingerprint = std::move(record.fingerprint);
   stored->answer = std::move(record.answer);
   stored->input_names = std::move(record.input_names);
+  for (HGraphRecord::Request& r : record.requests) {
+    stored->requests.emplace_back(std::move(r.id),
+                                  std::make_pair(std::move(r.fingerprint), std::move(r.answer)));
+  }
   if (first_use) {
     // Not yet reachable by any other call: no copy to search, no lock held meanwhile. A call
     // that asks for it meanwhile loads it too; the last to finish stays in the cache.
@@ -204,6 +208,10 @@ SharedState::Write PathMergerService::SaveHGraph(const std::string& name, Stored
   record.fingerprint = stored.fingerprint;
   record.answer = stored.answer;
   record.scene = stored.scene_digest;
+  // The caller holds stored.requests_mutex, or no other call can reach `stored` yet.
+  for (const auto& [id, first] : stored.requests) {
+    record.requests.push_back({.id = id, .fingerprint = first.first, .answer = first.second});
+  }
   uint64_t expected = 0;
   std::string value;
   {

@@ -19,7 +19,9 @@ namespace {
 constexpr char kPrefix[] = "hgraph:1:";
 // An H-Graph record: this tag and its version in 16 hex digits (what compare-and-set compares),
 // the SHA-256 of the rest in hex, then the fields.
-constexpr std::string_view kHGraphTag = "HGRAPH1:";
+// Records of another layout (HGRAPH1: before AddPaths' request ids) are refused as of another
+// format.
+constexpr std::string_view kHGraphTag = "HGRAPH2:";
 constexpr size_t kVersionEnd = 8 + 16;
 constexpr size_t kHeaderSize = kVersionEnd + 64;
 constexpr std::string_view kSessionTag = "SESSION1";
@@ -442,6 +444,15 @@ std::string SharedState::EncodeHGraph(const HGraphRecord& record, uint64_t versi
   fields.Add(record.fingerprint);
   fields.Add(record.answer);
   fields.Add(names.Take());
+  Fields requests;
+  for (const HGraphRecord::Request& r : record.requests) {
+    Fields request;
+    request.Add(r.id);
+    request.Add(r.fingerprint);
+    request.Add(r.answer);
+    requests.Add(request.Take());
+  }
+  fields.Add(requests.Take());
   // The header, its checksum left for PutHGraph; then the fields, the snapshot last, written
   // in place.
   std::string value;
@@ -529,7 +540,8 @@ std::optional<std::pair<uint64_t, HGraphRecord>> SharedState::GetHGraph(const st
   std::optional<int64_t> size;
   std::optional<int64_t> generation;
   std::optional<std::vector<std::string_view>> names;
-  if (fields && fields->size() == 12) {
+  std::optional<std::vector<std::string_view>> requests;
+  if (fields && fields->size() == 13) {
     const auto& f = *fields;
     record.name = std::string(f[0]);
     record.tenant = std::string(f[1]);
@@ -538,7 +550,18 @@ std::optional<std::pair<uint64_t, HGraphRecord>> SharedState::GetHGraph(const st
     if (f[4].size() == 8) std::memcpy(&record.resolution, f[4].data(), 8);
     generation = ParseInt(f[5]);
     names = SplitFields(f[10]);
-    if (size && generation && names && f[4].size() == 8 && IsSha256Hex(f[2]) &&
+    requests = SplitFields(f[11]);
+    bool requests_parse = requests.has_value();
+    for (size_t i = 0; requests_parse && i < requests->size(); ++i) {
+      const auto request = SplitFields((*requests)[i]);
+      HGraphRecord::Request& r = record.requests.emplace_back();
+      requests_parse = request && request->size() == 3 && ParseMessage((*request)[2], &r.answer);
+      if (requests_parse) {
+        r.id = std::string((*request)[0]);
+        r.fingerprint = std::string((*request)[1]);
+      }
+    }
+    if (size && generation && names && requests_parse && f[4].size() == 8 && IsSha256Hex(f[2]) &&
         ParseMessage(f[6], &record.measure) && ParseMessage(f[7], &record.options) &&
         ParseMessage(f[9], &record.answer)) {
       record.scene.set_size_bytes(*size);
@@ -547,7 +570,7 @@ std::optional<std::pair<uint64_t, HGraphRecord>> SharedState::GetHGraph(const st
       for (std::string_view n : *names) record.input_names.emplace_back(n);
       // The snapshot, the last field (it ends the value): kept in the value's own buffer, not
       // copied. The views into the value are not used after this.
-      bytes->erase(0, static_cast<size_t>(f[11].data() - bytes->data()));
+      bytes->erase(0, static_cast<size_t>(f[12].data() - bytes->data()));
       record.session = std::move(*bytes);
     } else {
       size.reset();

@@ -59,6 +59,14 @@ struct HGraphRecord {
   std::string fingerprint;  // of the MergePathsRequest (a repeat of its hgraph_id)
   v1::MergePathsResponse answer;
   std::vector<std::string> input_names;
+  // AddPaths' request ids, oldest first, each with the fingerprint of its request and its
+  // answer, so that a repeat on any replica answers as the first (StoredHGraph::requests).
+  struct Request {
+    std::string id;
+    std::string fingerprint;
+    v1::AddPathsResponse answer;
+  };
+  std::vector<Request> requests;
   std::string session;  // core/merge/snapshot.h's bytes
 };
 

@@ -383,30 +383,38 @@ grpc::ServerUnaryReactor* PathMergerService::AddPaths(grpc::CallbackServerContex
             generation = ++stored->generation;
             for (const InputPath& path : paths) stored->input_names.push_back(path.name);
           }
+          *response->mutable_result() = MergeResultToProto(result);
+          EchoEvaluation(stored->options, response->mutable_result());
+          response->set_hgraph(request->hgraph());
+          response->set_candidates_added(added);
+          response->set_generation(generation);
+          // The request id goes into the record with the addition, so that a repeat on any
+          // replica answers as this one (with what a replica that loads the record holds: the
+          // H-Graph kept and shared).
+          if (!request->request_id().empty()) {
+            v1::AddPathsResponse first = *response;
+            first.set_shared(true);
+            first.set_retention(v1::RETENTION_KEPT);
+            stored->requests.emplace_back(request->request_id(),
+                                          std::make_pair(fingerprint, std::move(first)));
+            if (stored->requests.size() > StoredHGraph::kMaxRequestIds)
+              stored->requests.pop_front();
+          }
           const SharedState::Write write = SaveHGraph(request->hgraph(), *stored, /*cas=*/true);
           if (write == SharedState::Write::kConflict) {
             spdlog::info("{}: another replica stored a newer version; adding again on it",
                          ClientText(request->hgraph()));
             cache_.Erase(CacheKind::kHGraph, request->hgraph());
             sessions_.ForgetHGraph(request->hgraph());
+            response->Clear();
             continue;
           }
           response->set_shared(shared_ != nullptr && write == SharedState::Write::kStored);
-          *response->mutable_result() = MergeResultToProto(result);
-          EchoEvaluation(stored->options, response->mutable_result());
           response->set_retention(Reaccount(request->hgraph(), *stored));
-          if (response->retention() == v1::RETENTION_KEPT) {
-            response->set_hgraph(request->hgraph());
-          }
-          response->set_candidates_added(added);
-          response->set_generation(generation);
+          if (response->retention() != v1::RETENTION_KEPT) response->clear_hgraph();
           RecordMerge("AddPaths", response->result());
-          if (!request->request_id().empty()) {
-            stored->requests.emplace_back(request->request_id(),
-                                          std::make_pair(fingerprint, *response));
-            if (stored->requests.size() > StoredHGraph::kMaxRequestIds)
-              stored->requests.pop_front();
-          }
+          // This replica's repeat answers exactly this.
+          if (!request->request_id().empty()) stored->requests.back().second.second = *response;
           return;
         }
       },

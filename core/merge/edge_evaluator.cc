@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "core/common/parallel.h"
+#include "core/merge/ceiling.h"
 
 namespace hgraph {
 namespace {
@@ -354,7 +355,8 @@ void LazyEdgeEvaluator::AddProbes(int e, const std::vector<ClearanceSample>& fou
   if (witnesses != nullptr && !witnesses->empty()) {
     evidence_.probe_witness[e].insert(evidence_.probe_witness[e].end(), witnesses->begin(),
                                       witnesses->end());
-    evidence_.ceiling_done[e] = 0;
+    int8_t& state = evidence_.ceiling_done[e];
+    if (state == kCeilingCurrent) state = kCeilingStale;
   }
   // The known probes stay sorted by t: the new ones are sorted and merged in, linear in what is
   // known (an edge at a fine resolution gathers a million probes, in tens of thousands of calls).
@@ -385,7 +387,7 @@ void LazyEdgeEvaluator::ComputeCeilings(const CancelToken& cancel) {
   std::vector<int> bounded;
   for (int e = 0; e < graph_.num_edges(); ++e) {
     const EdgeReport& report = graph_.edge(e).report;
-    if (!evidence_.ceiling_done[e] && report.state != EdgeState::kInvalid &&
+    if (evidence_.ceiling_done[e] != kCeilingCurrent && report.state != EdgeState::kInvalid &&
         !report.has_clearance) {
       bounded.push_back(e);
     }
@@ -412,23 +414,34 @@ EdgeBoundInput LazyEdgeEvaluator::BoundInput(int e, bool ceilings) {
 }
 
 const std::vector<ClearanceSample>& LazyEdgeEvaluator::CeilingOf(int e) {
-  if (evidence_.ceiling_done[e]) return evidence_.ceiling[e];
+  int8_t& state = evidence_.ceiling_done[e];
+  if (state == kCeilingCurrent) return evidence_.ceiling[e];
   const HEdge& edge = graph_.edge(e);
   const ClearanceWitness& from = evidence_.node_witness[edge.u];
   const ClearanceWitness& to = evidence_.node_witness[edge.v];
-  if (from.body < 0 && to.body < 0 && evidence_.probe_witness[e].empty())
-    return evidence_.ceiling[e];
-  evidence_.ceiling_done[e] = 1;
-  evidence_.ceiling[e].clear();
+  std::vector<ClearanceWitness>& pending = evidence_.probe_witness[e];
+  if (from.body < 0 && to.body < 0 && pending.empty()) return evidence_.ceiling[e];
   std::vector<ClearanceSample>& ceiling = evidence_.ceiling[e];
-  ForEachCeilingPoint(checker_->ProfileStretches(evidence_.edge_length[e]), [&](double t) {
-    ceiling.push_back({.t = t, .clearance = std::numeric_limits<double>::infinity()});
-  });
-  if (ceiling.empty()) return ceiling;
-  std::vector<ClearanceWitness> witnesses = evidence_.probe_witness[e];
-  witnesses.push_back(from);
-  witnesses.push_back(to);
-  checker_->LowerToWitnesses(graph_.node(edge.u).q, graph_.node(edge.v).q, witnesses, &ceiling);
+  if (state == kCeilingNone) {
+    ceiling.clear();
+    ForEachCeilingPoint(checker_->ProfileStretches(evidence_.edge_length[e]), [&](double t) {
+      ceiling.push_back({.t = t, .clearance = std::numeric_limits<double>::infinity()});
+    });
+  }
+  state = kCeilingCurrent;
+  if (!ceiling.empty()) {
+    // Lowered by the witnesses found since (core/merge/ceiling.h); the ends' go in again (a
+    // no-op once in), in case one was found since.
+    std::vector<ClearanceWitness> witnesses = std::move(pending);
+    witnesses.push_back(from);
+    witnesses.push_back(to);
+    checker_->LowerToWitnesses(graph_.node(edge.u).q, graph_.node(edge.v).q, witnesses, &ceiling);
+    // Rounded up to floats, as the snapshot stores them.
+    for (ClearanceSample& point : ceiling) point.clearance = CeilingValue(point.clearance);
+  }
+  // Lowered into the ceiling: no longer needed (nor stored by the snapshot).
+  pending.clear();
+  pending.shrink_to_fit();
   return ceiling;
 }
 

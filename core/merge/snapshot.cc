@@ -1,5 +1,6 @@
 #include "core/merge/snapshot.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstring>
@@ -9,6 +10,7 @@
 #include <vector>
 
 #include "core/common/error.h"
+#include "core/merge/ceiling.h"
 
 namespace hgraph {
 namespace {
@@ -253,7 +255,7 @@ class SessionSnapshot {
     w.Pod<int64_t>(s.unreported_.collision_checks);
     w.Pod<int64_t>(s.unreported_.distance_queries);
     w.PodRange(s.unprofiled_result_);
-    SaveEvidence(w, s.evidence_, grids);
+    SaveEvidence(w, s.graph_, s.evidence_, grids);
   }
 
   // Per edge, the stretches of the profile grid its ceiling lies on (ForEachCeilingPoint, as the
@@ -452,31 +454,54 @@ class SessionSnapshot {
     return g;
   }
 
-  // Each edge's ceiling: its size, then, when it lies on its profile's grid (ForEachCeilingPoint
-  // of the edge's stretches, as the evaluator built it), the stretches and its clearances only;
-  // else 0 and its samples.
-  // Each edge's ceiling: its size, then, on a grid (CeilingGrids), the grid's stretches and its
-  // clearances only; else 0 and its samples.
-  static void WriteCeilings(Writer& w, const EdgeEvidence& v, const std::vector<int32_t>& grids) {
+  // Whether a search may still read edge e's ceiling: not on an edge found invalid or profiled
+  // (its value is then exact), whose ceiling is not stored.
+  static bool MayUseCeiling(const HGraph& g, size_t e) {
+    const EdgeReport& r = g.edges_[e].report;
+    return r.state != EdgeState::kInvalid && !r.has_clearance;
+  }
+
+  // Each edge's ceiling: its size (0 on an edge that cannot use it, MayUseCeiling), then, on a
+  // grid (CeilingGrids), the grid's stretches, the width of its clearances (4: floats, as the
+  // evaluator keeps them; 8: doubles) and its clearances only; else 0 and its samples.
+  static void WriteCeilings(Writer& w, const HGraph& g, const EdgeEvidence& v,
+                            const std::vector<int32_t>& grids) {
     w.Size(v.ceiling.size());
     for (size_t e = 0; e < v.ceiling.size(); ++e) {
       const std::vector<ClearanceSample>& ceiling = v.ceiling[e];
+      if (!MayUseCeiling(g, e)) {
+        w.Size(0);
+        continue;
+      }
       w.Size(ceiling.size());
       if (ceiling.empty()) continue;
       w.Pod<int32_t>(grids[e]);
       if (grids[e] > 0) {
-        for (const ClearanceSample& c : ceiling) w.Pod<double>(c.clearance);
+        // Floats when every value is one (as the evaluator rounds them, CeilingValue).
+        const bool floats = std::all_of(ceiling.begin(), ceiling.end(), [](const auto& c) {
+          return CeilingValue(c.clearance) == c.clearance;
+        });
+        w.Pod<uint8_t>(floats ? sizeof(float) : sizeof(double));
+        for (const ClearanceSample& c : ceiling) {
+          if (floats) {
+            w.Pod<float>(static_cast<float>(c.clearance));
+          } else {
+            w.Pod<double>(c.clearance);
+          }
+        }
       } else {
         for (const ClearanceSample& c : ceiling) w.SampleItem(c);
       }
     }
   }
 
-  static std::vector<std::vector<ClearanceSample>> ReadCeilings(Reader& r, size_t edges) {
-    std::vector<std::vector<ClearanceSample>> v(Count(r, edges));
-    for (std::vector<ClearanceSample>& ceiling : v) {
-      const size_t n = r.Size(8);
+  static std::vector<std::vector<ClearanceSample>> ReadCeilings(Reader& r, const HGraph& g) {
+    std::vector<std::vector<ClearanceSample>> v(Count(r, static_cast<size_t>(g.num_edges())));
+    for (size_t e = 0; e < v.size(); ++e) {
+      std::vector<ClearanceSample>& ceiling = v[e];
+      const size_t n = r.Size(sizeof(float));
       if (n == 0) continue;
+      if (!MayUseCeiling(g, e)) r.Fail("a ceiling of an edge found invalid or profiled");
       const auto stretches = r.Pod<int32_t>();
       if (stretches < 0) r.Fail("a ceiling of a negative grid");
       if (stretches == 0) {
@@ -496,15 +521,29 @@ class SessionSnapshot {
         ++at;
       });
       if (at != n) r.Fail("a ceiling of another size than its grid");
-      const std::string_view clearances = r.Take(n * sizeof(double));
-      for (size_t i = 0; i < n; ++i) {
-        std::memcpy(&ceiling[i].clearance, clearances.data() + i * sizeof(double), sizeof(double));
+      const auto width = r.Pod<uint8_t>();
+      if (width == sizeof(float)) {
+        const std::string_view clearances = r.Take(n * sizeof(float));
+        for (size_t i = 0; i < n; ++i) {
+          float c = 0;
+          std::memcpy(&c, clearances.data() + i * sizeof(float), sizeof(float));
+          ceiling[i].clearance = c;
+        }
+      } else if (width == sizeof(double)) {
+        const std::string_view clearances = r.Take(n * sizeof(double));
+        for (size_t i = 0; i < n; ++i) {
+          std::memcpy(&ceiling[i].clearance, clearances.data() + i * sizeof(double),
+                      sizeof(double));
+        }
+      } else {
+        r.Fail("a ceiling of values neither floats nor doubles");
       }
     }
     return v;
   }
 
-  static void SaveEvidence(Writer& w, const EdgeEvidence& v, const std::vector<int32_t>& grids) {
+  static void SaveEvidence(Writer& w, const HGraph& g, const EdgeEvidence& v,
+                           const std::vector<int32_t>& grids) {
     w.PodVector<double>(v.goal_distance);
     w.PodVector<double>(v.node_clearance);
     w.PodVector<char>(v.node_valid);
@@ -515,9 +554,17 @@ class SessionSnapshot {
     WriteNested(w, v.probes, &Writer::SampleItem);
     w.PodVector<int8_t>(v.probe_rounds);
     w.PodVector<int8_t>(v.scanned);
-    WriteCeilings(w, v, grids);
+    WriteCeilings(w, g, v, grids);
     w.PodVector<int8_t>(v.ceiling_done);
-    WriteNested(w, v.probe_witness, &Writer::WitnessItem);
+    // The witnesses the ceilings do not hold yet, of the edges that may use them.
+    w.Size(v.probe_witness.size());
+    for (size_t e = 0; e < v.probe_witness.size(); ++e) {
+      const bool kept = MayUseCeiling(g, e);
+      w.Size(kept ? v.probe_witness[e].size() : 0);
+      if (kept) {
+        for (const ClearanceWitness& x : v.probe_witness[e]) w.Witness(x);
+      }
+    }
   }
 
   template <typename T, typename F>
@@ -558,10 +605,20 @@ class SessionSnapshot {
     for (std::vector<ClearanceSample>& p : v.probes) r.SamplesInto(&p);
     v.probe_rounds = Sized<int8_t>(r, edges);
     v.scanned = Sized<int8_t>(r, edges);
-    v.ceiling = ReadCeilings(r, edges);
+    v.ceiling = ReadCeilings(r, g);
     v.ceiling_done = Sized<int8_t>(r, edges);
+    for (const int8_t state : v.ceiling_done) {
+      if (state < kCeilingNone || state > kCeilingStale) {
+        r.Fail("a ceiling's state out of range");
+      }
+    }
     v.probe_witness =
         ReadNested<ClearanceWitness>(r, edges, [](Reader& in) { return in.Witness(); });
+    for (size_t e = 0; e < edges; ++e) {
+      if (!v.probe_witness[e].empty() && !MayUseCeiling(g, e)) {
+        r.Fail("witnesses of an edge found invalid or profiled");
+      }
+    }
     return v;
   }
 };

@@ -110,6 +110,37 @@ def test_another_replica_answers_after_the_builder_is_killed(replicas):
     assert b.metric("hgraph_store_loads_total", kind="session") == 1
 
 
+def test_add_paths_request_id_is_recognised_on_another_replica(replicas):
+    """An AddPaths repeated with its request id on another replica (a retry that nginx sent
+    elsewhere, its first replica lost or not) answers as the first and adds nothing; the same
+    id with other paths is refused there too."""
+    a, b = replicas(), replicas()
+    extra = [[list(q.values) for q in p.waypoints] for p in paths().paths]
+    with a.client() as ca:
+        merged = merge_on(ca)
+        first = ca.add_paths(merged.hgraph, extra, request_id="retry-7")
+        assert first.shared and first.generation == 2 and len(first.result.inputs) == 4
+    a.kill()
+    with b.client() as cb:
+        again = cb.add_paths(merged.hgraph, extra, request_id="retry-7")
+        assert again.generation == 2 and again.hgraph == first.hgraph
+        assert again.result == first.result and again.candidates_added == first.candidates_added
+        graph = cb.get_hgraph(merged.hgraph)
+        assert graph.generation == 2 and len(graph.inputs) == 4
+        with pytest.raises(hgraph_client.HgraphError) as e:
+            cb.add_paths(merged.hgraph, extra[:1], request_id="retry-7")
+        assert e.value.code == grpc.StatusCode.ALREADY_EXISTS, e.value.message
+        # A new id adds, and is remembered across replicas in turn.
+        grown = cb.add_paths(merged.hgraph, extra[:1], request_id="retry-8")
+        assert grown.generation == 3 and len(grown.result.inputs) == 5
+    c = replicas()
+    with c.client() as cc:
+        assert cc.add_paths(merged.hgraph, extra[:1], request_id="retry-8").generation == 3
+        assert cc.add_paths(merged.hgraph, extra, request_id="retry-7").generation == 2
+        assert cc.get_hgraph(merged.hgraph).generation == 3
+    assert b.metric("hgraph_store_loads_total", kind="hgraph") == 1
+
+
 def test_another_tenant_cannot_load_a_stored_session(replicas, tmp_path):
     tokens = tmp_path / "tokens.txt"
     tokens.write_text("token-of-tenant-a-0001 team-a\ntoken-of-tenant-b-0002 team-b\n")

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <memory>
 #include <string>
 
@@ -129,6 +130,47 @@ TEST_F(SnapshotTest, RefusesBytesItCannotTrust) {
   }
   EXPECT_THROW(LoadSession(planner_, bytes + "x"), SnapshotError);
   EXPECT_THROW(LoadSession(planner_, std::string(4096, '\xff')), SnapshotError);
+  // The format before (2: every ceiling stored, as doubles, with its witnesses) is refused,
+  // naming both formats.
+  std::string previous = bytes;
+  previous[8] = 2;
+  try {
+    LoadSession(planner_, previous);
+    FAIL() << "format 2 was loaded";
+  } catch (const SnapshotError& e) {
+    EXPECT_NE(std::string(e.what()).find("format 2, this server reads format 3"), std::string::npos)
+        << e.what();
+  }
+}
+
+// A snapshot of a merge under clearance with any byte changed (ceilings' sizes, widths and
+// values among them) loads or is refused with SnapshotError, never anything else (a crash, an
+// allocation the bytes do not back; ASan runs this too).
+TEST_F(SnapshotTest, EveryChangedByteLoadsOrIsRefused) {
+  MergeRequest request{.paths = testing::CirclePaths(), .measure = Clearance()};
+  request.options.candidates.variant = Variant::kAllPairs;
+  request.options.optimize_ms = 0;
+  HybridizationSession saved(planner_, request);
+  saved.Query(request.measure);
+  const std::string bytes = SaveSession(saved);
+  int refused = 0;
+  int loaded = 0;
+  const size_t stride = std::max<size_t>(1, bytes.size() / 1500);
+  for (size_t at = 8; at < bytes.size(); at += stride) {
+    for (const char value : {'\x00', '\x03', '\xff'}) {
+      if (bytes[at] == value) continue;
+      std::string changed = bytes;
+      changed[at] = value;
+      try {
+        LoadSession(planner_, changed);
+        ++loaded;
+      } catch (const SnapshotError&) {
+        ++refused;
+      }
+    }
+  }
+  EXPECT_GT(refused, 0);
+  EXPECT_GT(loaded, 0) << "a changed clearance is a value like any other";
 }
 
 // A snapshot of one space is refused by a checker of another (the configurations do not fit).
