@@ -193,6 +193,8 @@ int RunLocal(const SolveFlags& f) {
   r->set_message(solved.message);
   for (const SolveRun& run : solved.runs) *r->add_runs() = RunToProto(run);
   r->set_plan_ms(solved.plan_ms);
+  r->set_most_runs_at_once(solved.most_runs_at_once);
+  r->set_runs_on_call_worker(solved.runs_on_caller);
   r->set_elapsed_ms(solved.elapsed_ms);
   r->set_budget_s(proto.budget_s());
   if (solved.found) *r->mutable_merge() = MergeResultToProto(solved.result);
