@@ -231,11 +231,12 @@ Subcommand AddSolveCommand(CLI::App& parent) {
       ->required();
   app->add_option("--budget", f.budget_s, "Whole time budget, seconds (planning and merging)")
       ->capture_default_str();
-  app->add_option(
-      "--planner", f.planners,
-      "A planner of the portfolio and its runs, NAME[:RUNS] (repeat the flag): prm, "
-      "prm-cycles, prmstar, rrt, rrtconnect, lazyprm, rrtstar, informed-rrtstar, "
-      "bitstar, aitstar (default: prm, two runs per --parallel slot, four from a 10 s budget on)");
+  app->add_option("--planner", f.planners,
+                  "A planner of the portfolio and its runs, NAME[:RUNS] (repeat the flag): prm, "
+                  "prm-cycles, prmstar, rrt, rrtconnect, lazyprm, rrtstar, informed-rrtstar, "
+                  "bitstar, aitstar (default: prm, two runs per --parallel slot; from a 10 s "
+                  "budget on one prm run per slot, then bitstar and rrtstar sharing the time prm "
+                  "leaves)");
   f.fields.Add<double>(
       app, "--plan-fraction",
       "Share of the budget in which planners run, in (0, 1] (default 0.7); the rest merges",

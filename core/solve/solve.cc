@@ -254,9 +254,15 @@ bool PlanOne(const MotionChecker& checker, const SolveRequest& request, RunBoard
 }  // namespace
 
 std::vector<PortfolioEntry> DefaultPortfolio(int parallel, double budget_s) {
-  const int per_slot = budget_s >= kLongSolveBudgetS ? 4 : 2;
-  return {
-      {.planner = PlannerType::kPRM, .runs = std::clamp(per_slot * parallel, 2, kMaxSolveRuns)}};
+  if (budget_s < kLongSolveBudgetS) {
+    return {{.planner = PlannerType::kPRM, .runs = std::clamp(2 * parallel, 2, kMaxSolveRuns)}};
+  }
+  // RunOrder starts the PRM runs first; BIT* and RRT* share the planning time they leave.
+  const int prm = std::clamp(parallel, 2, kMaxSolveRuns - 2);
+  const int left = kMaxSolveRuns - prm;
+  return {{.planner = PlannerType::kPRM, .runs = prm},
+          {.planner = PlannerType::kBITStar, .runs = std::clamp((parallel + 1) / 2, 1, left - 1)},
+          {.planner = PlannerType::kRRTStar, .runs = std::clamp(parallel / 2, 1, left / 2)}};
 }
 
 SolveRequest ResolveSolveRequest(const MotionChecker& checker, const SolveRequest& request) {

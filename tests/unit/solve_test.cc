@@ -147,7 +147,7 @@ TEST_F(SolveTest, TheHGraphServesQueriesAndAdditions) {
   EXPECT_LE(result.session->Query({}).objective, again.objective + 1e-9);
 }
 
-// The default portfolio runs asymptotically optimal planners beside PRM.
+// The default portfolio runs every kind it names; from a long budget on, BIT* and RRT* beside PRM.
 TEST_F(SolveTest, DefaultPortfolioRunsEveryKindItNames) {
   SolveRequest request = MazeRequest();
   const SolveResult result = Solve(*maze_->planner, request);
@@ -160,10 +160,12 @@ TEST_F(SolveTest, DefaultPortfolioRunsEveryKindItNames) {
     EXPECT_TRUE(seen) << PlannerTypeName(e.planner);
   }
   EXPECT_EQ(static_cast<int>(result.runs.size()), runs);
-  // A long budget has room for more runs of the planners that stop at their first path.
-  int long_runs = 0;
-  for (const PortfolioEntry& e : DefaultPortfolio(2, kLongSolveBudgetS)) long_runs += e.runs;
-  EXPECT_GT(long_runs, runs);
+  // A long budget adds BIT* and RRT*, which use the planning time PRM's runs leave.
+  std::vector<PlannerType> kinds;
+  for (const PortfolioEntry& e : DefaultPortfolio(2, kLongSolveBudgetS)) kinds.push_back(e.planner);
+  EXPECT_EQ(kinds, (std::vector<PlannerType>{PlannerType::kPRM, PlannerType::kBITStar,
+                                             PlannerType::kRRTStar}));
+  for (const PortfolioEntry& e : DefaultPortfolio()) EXPECT_EQ(e.planner, PlannerType::kPRM);
 }
 
 TEST_F(SolveTest, BadRequestsNameTheField) {
