@@ -311,7 +311,7 @@ std::string Svg(const Results& results, const std::vector<Method>& methods) {
       << "\" height=\"" << panel_h << "\" fill=\"none\" stroke=\"#999\"/>\n";
     if (!(hi > 0)) continue;
     const double t_lo = 0.05;
-    hi = std::min(hi, lo * 2.5);  // a far outlier would flatten the rest
+    hi = std::min(hi, lo * 4);  // a far outlier would flatten the rest (drawn at the top)
     const double pad = (hi - lo) * 0.08 + 1e-9;
     const double y_lo = lo - pad, y_hi = hi + pad;
     const auto X = [&](double ms) {
