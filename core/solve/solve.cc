@@ -117,12 +117,12 @@ class RunBoard {
     }
     changed_.notify_all();
   }
-  // A task started by start_beside has returned (whether or not it found a run to start).
+  // A task started by start_beside has returned (whether or not it found a run to start). It
+  // notifies under the lock: once the caller sees every task done it may destroy the board, and
+  // a pool task (unlike a thread) is not joined.
   void TaskDone() {
-    {
-      std::lock_guard lock(mutex_);
-      ++tasks_done_;
-    }
+    std::lock_guard lock(mutex_);
+    ++tasks_done_;
     changed_.notify_all();
   }
   // No further run starts (the ones running go on until their planner stops).
