@@ -1,4 +1,5 @@
 #include <cmath>
+#include <functional>
 #include <memory>
 #include <string>
 #include <utility>
@@ -16,7 +17,7 @@
 namespace hgraph::server {
 
 #ifdef HGRAPH_HAVE_SOLVE
-// Solve: runs the portfolio and the merge on a worker (the planners on threads of their own);
+// Solve: runs the portfolio and the merge on a worker, the planner runs on idle workers beside it;
 // each ended run and each improvement is queued and written in order, one write in flight, then
 // the result and the status.
 class PathMergerService::SolveCall final : public StreamingCall<v1::SolveResponse> {
@@ -64,7 +65,9 @@ class PathMergerService::SolveCall final : public StreamingCall<v1::SolveRespons
     }
     const int threads = service_->pool().threads();
     if (solve.merge.threads <= 0 || solve.merge.threads > threads) solve.merge.threads = threads;
-    if (solve.parallel > threads) solve.parallel = threads;
+    // 0: the pool's threads. More than the pool has free never run at once: the planner runs go
+    // to idle workers only (the call's own worker plans the rest).
+    if (solve.parallel == 0) solve.parallel = threads;
     int runs = 0;
     for (int i = 0; i < request.portfolio_size(); ++i) {
       const v1::PortfolioEntry& entry = request.portfolio(i);
@@ -96,6 +99,11 @@ class PathMergerService::SolveCall final : public StreamingCall<v1::SolveRespons
     const double resolution = ResolutionFromProto(request.options(), *scene.proto);
     SolveRequest solve = Build(request, scene.world->scene(), resolution);
     solve.cancel = token_;
+    // The planner runs go on the worker pool, beside this job, while it has an idle worker and
+    // a free admission slot.
+    solve.start_beside = [pool = &service_->pool()](std::function<void()> task) {
+      return pool->TryRunOnIdleWorker(std::move(task));
+    };
     solve.on_run = [this](const SolveRun& run) {
       v1::SolveResponse event;
       v1::SolveProgress* p = event.mutable_progress();
@@ -126,6 +134,8 @@ class PathMergerService::SolveCall final : public StreamingCall<v1::SolveRespons
     out->set_message(solved.message);
     for (const SolveRun& run : solved.runs) *out->add_runs() = RunToProto(run);
     out->set_plan_ms(solved.plan_ms);
+    out->set_most_runs_at_once(solved.most_runs_at_once);
+    out->set_runs_on_call_worker(solved.runs_on_caller);
     out->set_budget_s(solve.budget_s);
     if (solved.found) {
       *out->mutable_merge() = MergeResultToProto(solved.result);

@@ -127,6 +127,31 @@ void WorkerPool::SubmitHeld(std::function<void(Slot&)> job) {
   });
 }
 
+bool WorkerPool::TryRunOnIdleWorker(std::function<void()> job) {
+  // running_ counts the jobs queued or running: fewer than the workers means one is idle.
+  int current = running_.load();
+  do {
+    if (current >= threads_) return false;
+  } while (!running_.compare_exchange_weak(current, current + 1));
+  if (!TryHold()) {
+    if (running_.fetch_sub(1) == 1) {
+      std::lock_guard lock(mutex_);
+      idle_.notify_all();
+    }
+    return false;
+  }
+  runner_->Run([this, job = std::move(job)] {
+    Slot slot(this);
+    job();
+    slot.Release();
+    if (running_.fetch_sub(1) == 1) {
+      std::lock_guard lock(mutex_);
+      idle_.notify_all();
+    }
+  });
+  return true;
+}
+
 void WorkerPool::WaitIdle() {
   std::unique_lock lock(mutex_);
   idle_.wait(lock, [this] { return running_.load() == 0; });

@@ -47,6 +47,11 @@ class WorkerPool {
   void Unhold();
   // Queues a job on a slot taken with TryHold; the job's Slot releases it.
   void SubmitHeld(std::function<void(Slot&)> job);
+  // Starts `job` now on a worker that has nothing else to run, holding an admission slot while
+  // it runs (a Solve's planner run beside the Solve's own job), or returns false without
+  // running it when every worker has a job or the admission queue is full: the job never waits
+  // in the queue behind other calls. The job must not throw.
+  bool TryRunOnIdleWorker(std::function<void()> job);
   // Blocks until every admitted job has returned.
   void WaitIdle();
 

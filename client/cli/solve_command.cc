@@ -193,6 +193,8 @@ int RunLocal(const SolveFlags& f) {
   r->set_message(solved.message);
   for (const SolveRun& run : solved.runs) *r->add_runs() = RunToProto(run);
   r->set_plan_ms(solved.plan_ms);
+  r->set_most_runs_at_once(solved.most_runs_at_once);
+  r->set_runs_on_call_worker(solved.runs_on_caller);
   r->set_elapsed_ms(solved.elapsed_ms);
   r->set_budget_s(proto.budget_s());
   if (solved.found) *r->mutable_merge() = MergeResultToProto(solved.result);
@@ -229,11 +231,12 @@ Subcommand AddSolveCommand(CLI::App& parent) {
       ->required();
   app->add_option("--budget", f.budget_s, "Whole time budget, seconds (planning and merging)")
       ->capture_default_str();
-  app->add_option(
-      "--planner", f.planners,
-      "A planner of the portfolio and its runs, NAME[:RUNS] (repeat the flag): prm, "
-      "prm-cycles, prmstar, rrt, rrtconnect, lazyprm, rrtstar, informed-rrtstar, "
-      "bitstar, aitstar (default: prm, two runs per --parallel slot, four from a 10 s budget on)");
+  app->add_option("--planner", f.planners,
+                  "A planner of the portfolio and its runs, NAME[:RUNS] (repeat the flag): prm, "
+                  "prm-cycles, prmstar, rrt, rrtconnect, lazyprm, rrtstar, informed-rrtstar, "
+                  "bitstar, aitstar (default: prm, two runs per --parallel slot; from a 10 s "
+                  "budget on one prm run per slot, then bitstar and rrtstar sharing the time prm "
+                  "leaves)");
   f.fields.Add<double>(
       app, "--plan-fraction",
       "Share of the budget in which planners run, in (0, 1] (default 0.7); the rest merges",

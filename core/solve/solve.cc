@@ -70,7 +70,7 @@ std::vector<PlannerType> RunOrder(const std::vector<PortfolioEntry>& portfolio) 
   return order;
 }
 
-// The planner runs, shared by the planner threads and the merging thread. Thread safe.
+// The planner runs, shared by the planner tasks and the merging thread. Thread safe.
 class RunBoard {
  public:
   // Runs end by plan_end once a path is known, and by `last` (the budget's end, less the
@@ -88,10 +88,9 @@ class RunBoard {
   // The next run to start and its time, or false when there is none (or no time left for one).
   bool Next(int* index, PlannerType* planner, double* time_s, double* start_ms) {
     std::lock_guard lock(mutex_);
-    if (stopped_ || next_ >= static_cast<int>(order_.size())) return false;
     const Clock::time_point now = Clock::now();
+    if (ExhaustedLocked(now)) return false;
     const double left_s = std::chrono::duration<double>((found_ ? plan_end_ : last_) - now).count();
-    if (left_s < kMinRunS) return false;
     *index = next_++;
     *planner = order_[*index];
     *start_ms = MsBetween(started_, now);
@@ -103,6 +102,8 @@ class RunBoard {
     } else {
       *time_s = left_s;  // it stops at its first path
     }
+    ++running_;
+    most_running_ = std::max(most_running_, running_);
     return true;
   }
 
@@ -111,16 +112,17 @@ class RunBoard {
     {
       std::lock_guard lock(mutex_);
       found_ = found_ || !path.waypoints.empty();
+      --running_;
       ended_.push_back({std::move(run), std::move(path)});
     }
     changed_.notify_all();
   }
-  // A planner thread has no more runs to start.
-  void ThreadDone() {
-    {
-      std::lock_guard lock(mutex_);
-      ++threads_done_;
-    }
+  // A task started by start_beside has returned (whether or not it found a run to start). It
+  // notifies under the lock: once the caller sees every task done it may destroy the board, and
+  // a pool task (unlike a thread) is not joined.
+  void TaskDone() {
+    std::lock_guard lock(mutex_);
+    ++tasks_done_;
     changed_.notify_all();
   }
   // No further run starts (the ones running go on until their planner stops).
@@ -129,15 +131,50 @@ class RunBoard {
     stopped_ = true;
   }
 
-  // Waits until a run ends, every thread is done, or `until`; takes the runs that ended.
-  // Returns whether every planner thread is done.
-  bool Wait(Clock::time_point until, int threads,
+  bool found() const {
+    std::lock_guard lock(mutex_);
+    return found_;
+  }
+  // No run is left to start: stopped, all started, or no time left for one.
+  bool Exhausted() const {
+    std::lock_guard lock(mutex_);
+    return ExhaustedLocked(Clock::now());
+  }
+  int running() const {
+    std::lock_guard lock(mutex_);
+    return running_;
+  }
+  int most_running() const {
+    std::lock_guard lock(mutex_);
+    return most_running_;
+  }
+  int tasks_done() const {
+    std::lock_guard lock(mutex_);
+    return tasks_done_;
+  }
+
+  // Waits until a run ends, every run is over (none left to start, none running, all `tasks`
+  // returned), fewer than `parallel` tasks go on while runs are left, or `until`; takes the runs
+  // that ended. Returns whether every run is over.
+  bool Wait(Clock::time_point until, int tasks,
             std::vector<std::pair<SolveRun, InputPath>>* ended) {
     std::unique_lock lock(mutex_);
-    changed_.wait_until(lock, until, [&] { return !ended_.empty() || threads_done_ == threads; });
+    const auto over = [&] {
+      return running_ == 0 && tasks_done_ == tasks && ExhaustedLocked(Clock::now());
+    };
+    // A task's return frees a slot for the next run.
+    const auto slot = [&] {
+      return tasks - tasks_done_ < parallel_ && !ExhaustedLocked(Clock::now());
+    };
+    changed_.wait_until(lock, until, [&] { return !ended_.empty() || over() || slot(); });
     for (auto& e : ended_) ended->push_back(std::move(e));
     ended_.clear();
-    return threads_done_ == threads;
+    return over();
+  }
+  // Waits until `tasks` tasks have returned.
+  void WaitTasks(int tasks) {
+    std::unique_lock lock(mutex_);
+    changed_.wait(lock, [&] { return tasks_done_ == tasks; });
   }
 
   // The runs that never started (no time was left for them).
@@ -147,6 +184,11 @@ class RunBoard {
   }
 
  private:
+  bool ExhaustedLocked(Clock::time_point now) const {
+    if (stopped_ || next_ >= static_cast<int>(order_.size())) return true;
+    return std::chrono::duration<double>((found_ ? plan_end_ : last_) - now).count() < kMinRunS;
+  }
+
   const std::vector<PlannerType> order_;
   const int parallel_;
   const Clock::time_point started_;
@@ -157,62 +199,70 @@ class RunBoard {
   std::condition_variable changed_;
   int next_ = 0;
   int optimizing_left_ = 0;
-  int threads_done_ = 0;
+  int running_ = 0;
+  int most_running_ = 0;
+  int tasks_done_ = 0;
   bool stopped_ = false;
   std::deque<std::pair<SolveRun, InputPath>> ended_;
 };
 
-// One planner thread: starts runs until the board has none left.
-void PlanRuns(const MotionChecker& checker, const SolveRequest& request, RunBoard* board,
-              const CancelToken& stop, const CancelToken& finish) {
+// Starts the board's next run, if any, and plans it to its end. Returns whether a run started.
+bool PlanOne(const MotionChecker& checker, const SolveRequest& request, RunBoard* board,
+             const CancelToken& stop, const CancelToken& finish) {
   int index = 0;
   PlannerType planner = PlannerType::kPRM;
   double time_s = 0;
   double start_ms = 0;
-  while (!stop.stopped() && !finish.stopped() &&
-         board->Next(&index, &planner, &time_s, &start_ms)) {
-    SolveRun run{.planner = planner, .index = index, .time_s = time_s, .start_ms = start_ms};
-    InputPath path;
-    try {
-      PlanResult planned =
-          PlanPaths(checker, PlanRequest{.planner = planner,
-                                         .start = request.start,
-                                         .goal = request.goal,
-                                         .count = 1,
-                                         .time_s = time_s,
-                                         .seed = PlanAttemptSeed(request.seed, index),
-                                         .resolution = request.resolution,
-                                         .motion_check = request.plan_check,
-                                         .keep_uncertified = true,
-                                         .cancel = stop,
-                                         .finish = finish});
-      const PlanAttempt& attempt = planned.attempts.at(0);
-      run.seed = attempt.seed;
-      run.elapsed_ms = attempt.elapsed_ms;
-      run.found = attempt.found;
-      run.certified = attempt.certified;
-      run.length = attempt.length;
-      run.status = attempt.status;
-      if (!planned.paths.empty()) {
-        path = std::move(planned.paths.front());
-        path.name = std::string(PlannerTypeName(planner)) + "-" + std::to_string(index);
-        run.path_name = path.name;
-      }
-    } catch (const std::exception& e) {
-      // Cancelled, or a planner that failed: the run found nothing.
-      run.status = e.what();
-    }
-    board->Finish(std::move(run), std::move(path));
+  if (stop.stopped() || finish.stopped() || !board->Next(&index, &planner, &time_s, &start_ms)) {
+    return false;
   }
-  board->ThreadDone();
+  SolveRun run{.planner = planner, .index = index, .time_s = time_s, .start_ms = start_ms};
+  InputPath path;
+  try {
+    PlanResult planned =
+        PlanPaths(checker, PlanRequest{.planner = planner,
+                                       .start = request.start,
+                                       .goal = request.goal,
+                                       .count = 1,
+                                       .time_s = time_s,
+                                       .seed = PlanAttemptSeed(request.seed, index),
+                                       .resolution = request.resolution,
+                                       .motion_check = request.plan_check,
+                                       .keep_uncertified = true,
+                                       .cancel = stop,
+                                       .finish = finish});
+    const PlanAttempt& attempt = planned.attempts.at(0);
+    run.seed = attempt.seed;
+    run.elapsed_ms = attempt.elapsed_ms;
+    run.found = attempt.found;
+    run.certified = attempt.certified;
+    run.length = attempt.length;
+    run.status = attempt.status;
+    if (!planned.paths.empty()) {
+      path = std::move(planned.paths.front());
+      path.name = std::string(PlannerTypeName(planner)) + "-" + std::to_string(index);
+      run.path_name = path.name;
+    }
+  } catch (const std::exception& e) {
+    // Cancelled, or a planner that failed: the run found nothing.
+    run.status = e.what();
+  }
+  board->Finish(std::move(run), std::move(path));
+  return true;
 }
 
 }  // namespace
 
 std::vector<PortfolioEntry> DefaultPortfolio(int parallel, double budget_s) {
-  const int per_slot = budget_s >= kLongSolveBudgetS ? 4 : 2;
-  return {
-      {.planner = PlannerType::kPRM, .runs = std::clamp(per_slot * parallel, 2, kMaxSolveRuns)}};
+  if (budget_s < kLongSolveBudgetS) {
+    return {{.planner = PlannerType::kPRM, .runs = std::clamp(2 * parallel, 2, kMaxSolveRuns)}};
+  }
+  // RunOrder starts the PRM runs first; BIT* and RRT* share the planning time they leave.
+  const int prm = std::clamp(parallel, 2, kMaxSolveRuns - 2);
+  const int left = kMaxSolveRuns - prm;
+  return {{.planner = PlannerType::kPRM, .runs = prm},
+          {.planner = PlannerType::kBITStar, .runs = std::clamp((parallel + 1) / 2, 1, left - 1)},
+          {.planner = PlannerType::kRRTStar, .runs = std::clamp(parallel / 2, 1, left / 2)}};
 }
 
 SolveRequest ResolveSolveRequest(const MotionChecker& checker, const SolveRequest& request) {
@@ -297,6 +347,8 @@ SolveResult Solve(const ClearanceChecker& checker, const SolveRequest& raw) {
   RunBoard board(RunOrder(request.portfolio), request.parallel, started, plan_end,
                  std::max(plan_end, at(budget * kLastPlanShare)));
   std::atomic<bool> finished{false};
+  // Passes the caller's cancel on, and ends the planning time at plan_end once a path is known
+  // (also while the calling thread plans a run itself).
   std::thread watcher([&] {
     while (!finished.load()) {
       if (request.cancel.stopped()) {
@@ -305,18 +357,46 @@ SolveResult Solve(const ClearanceChecker& checker, const SolveRequest& raw) {
         board.Stop();
         return;
       }
+      if (!finish.stopped() && Clock::now() >= plan_end && board.found()) {
+        finish.Cancel();
+        board.Stop();
+      }
       std::this_thread::sleep_for(std::chrono::milliseconds(5));
     }
   });
-  std::vector<std::thread> threads;
-  threads.reserve(request.parallel);
-  for (int t = 0; t < request.parallel; ++t) {
-    threads.emplace_back([&] { PlanRuns(checker, request, &board, planners, finish); });
-  }
+  // The planner tasks: each plans runs one after the other (PlanOne) until none is left, so that
+  // the next run starts while the calling thread merges. In process, a thread each.
+  std::vector<std::thread> own_threads;
+  const std::function<bool(std::function<void()>)> start_beside =
+      request.start_beside ? request.start_beside : [&](std::function<void()> task) {
+        own_threads.emplace_back(std::move(task));
+        return true;
+      };
+  int tasks = 0;  // started by start_beside
+  // Starts tasks while fewer than `parallel` go on and runs are left, until one is refused (a
+  // worker that is busy now may be free when the caller looks again, after a run or a merge).
+  const auto start_tasks = [&] {
+    while (tasks - board.tasks_done() < request.parallel && !board.Exhausted()) {
+      if (!start_beside([&] {
+            while (PlanOne(checker, request, &board, planners, finish)) {
+            }
+            board.TaskDone();
+          })) {
+        return;
+      }
+      ++tasks;
+    }
+  };
+  const auto join_tasks = [&] {
+    board.WaitTasks(tasks);
+    for (std::thread& t : own_threads) t.join();
+    own_threads.clear();
+  };
 
   SolveResult out;
   std::optional<MergeResult> best;
   std::vector<InputPath> pending;  // paths not in an H-Graph yet (none certified so far)
+  bool unmerged = false;           // a path arrived since the last query
   bool all_done = false;
   bool final_query = false;  // a query ran after the last path, with the long post-optimization
   bool stopped = false;      // the hard stop (or a cancel) interrupted a query
@@ -365,15 +445,26 @@ SolveResult Solve(const ClearanceChecker& checker, const SolveRequest& raw) {
 
   try {
     while (!stopped) {
+      start_tasks();
+      // A run no task took: the calling thread plans it, unless a path waits to be merged.
+      bool planned_here = false;
+      if (!unmerged && tasks - board.tasks_done() < request.parallel && !board.Exhausted() &&
+          !request.cancel.stopped()) {
+        planned_here = PlanOne(checker, request, &board, planners, finish);
+        if (planned_here) ++out.runs_on_caller;
+      }
       std::vector<std::pair<SolveRun, InputPath>> ended;
       // Wakes at plan_end to finish the planners if a path is known by then.
-      const Clock::time_point wake = finish.stopped() || Clock::now() >= plan_end ? end : plan_end;
-      all_done = board.Wait(wake, request.parallel, &ended);
+      const Clock::time_point wake = planned_here                                   ? Clock::now()
+                                     : finish.stopped() || Clock::now() >= plan_end ? end
+                                                                                    : plan_end;
+      all_done = board.Wait(wake, tasks, &ended);
       for (auto& [run, path] : ended) {
         if (request.on_run) request.on_run(run);
         if (!path.waypoints.empty()) {
           out.inputs.push_back(path);
           pending.push_back(std::move(path));
+          unmerged = true;
         }
         out.runs.push_back(std::move(run));
       }
@@ -383,8 +474,9 @@ SolveResult Solve(const ClearanceChecker& checker, const SolveRequest& raw) {
       }
       if (all_done && out.plan_ms == 0) out.plan_ms = MsSince(started);
       if (request.cancel.stopped() || Clock::now() >= end) break;
-      if (!pending.empty()) {
+      if (unmerged) {
         query(all_done);
+        unmerged = false;
         final_query = all_done;
       }
       if (all_done) break;
@@ -397,21 +489,22 @@ SolveResult Solve(const ClearanceChecker& checker, const SolveRequest& raw) {
     finished = true;
     planners.Cancel();
     board.Stop();
-    for (std::thread& t : threads) t.join();
+    join_tasks();
     watcher.join();
     throw;
   }
   finished = true;
   planners.Cancel();
   board.Stop();
-  for (std::thread& t : threads) t.join();
+  join_tasks();
   watcher.join();
+  out.most_runs_at_once = board.most_running();
   request.cancel.ThrowIfStopped();
   if (out.plan_ms == 0) out.plan_ms = MsSince(started);
 
   // The runs that were still going at the end, and those that never started.
   std::vector<std::pair<SolveRun, InputPath>> late;
-  board.Wait(Clock::now(), request.parallel, &late);
+  board.Wait(Clock::now(), tasks, &late);
   for (auto& [run, path] : late) {
     if (request.on_run) request.on_run(run);
     out.runs.push_back(std::move(run));

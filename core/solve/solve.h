@@ -1,12 +1,14 @@
 // Solve: the best certified path within a time budget, from a portfolio of planners whose paths
 // are merged into one H-Graph as they arrive ("a little more, a lot better" as one call).
 //
-// Planners (core/plan) run on threads of their own, as many at once as SolveRequest::parallel
-// says; the calling thread adds each path to the H-Graph as it arrives (the AddPaths code path
-// of HybridizationSession), searches it again and reports the best certified path so far. When
-// every planner has stopped (at the latest when the planning share of the budget ends), the
-// last query's post-optimization runs until the budget's end. The H-Graph is returned for
-// re-queries and additions, as a merge's.
+// Planners (core/plan) run as tasks started by SolveRequest::start_beside (in the server, jobs on
+// its worker pool while the pool has a free worker; in process, threads of their own), as many at
+// once as SolveRequest::parallel says and the pool allows; the calling thread plans too while no
+// task could start and no path waits to be merged. It adds each path to the H-Graph as it
+// arrives (the AddPaths code path of HybridizationSession), searches it again and reports the
+// best certified path so far. When every planner has stopped (at the latest when the planning
+// share of the budget ends), the last query's post-optimization runs until the budget's end.
+// The H-Graph is returned for re-queries and additions, as a merge's.
 #pragma once
 
 #include <chrono>
@@ -31,10 +33,13 @@ struct PortfolioEntry {
 };
 
 // The portfolio used when the request names none, for `parallel` runs at once and a budget of
-// `budget_s`: PRM (the paper's, without cycles), two runs per parallel slot, four from a budget
-// of kLongSolveBudgetS on (the runs end at their first path, so a long budget has time for more
-// inputs). On the bench's real-size problems it beat BIT* and RRT* alone and portfolios with
-// them at 3 and 10 s (docs/performance.md, "Solve").
+// `budget_s`: PRM (the paper's, without cycles), two runs per parallel slot; from a budget of
+// kLongSolveBudgetS on, one PRM run per slot (at least two) and BIT* and RRT* runs (one each
+// per two slots, at least one each), which start when the PRM runs have and share the planning
+// time those leave: PRM's runs end at their first path, and their paths may all take a poor
+// route that no merge can leave (the bench's `flat`), where an optimizing planner given the
+// rest of the time finds another. On the bench's real-size problems (docs/performance.md,
+// "Solve") PRM alone did best at 1 and 3 s, and PRM with BIT* and RRT* at 10 and 30 s.
 inline constexpr double kLongSolveBudgetS = 10;
 std::vector<PortfolioEntry> DefaultPortfolio(int parallel = 2, double budget_s = 3);
 // The default share of the budget given to planning (SolveRequest::plan_fraction) once a path
@@ -88,8 +93,17 @@ struct SolveRequest {
   // rest (and whatever the planners leave) goes to merging their paths. When no run has found a
   // path by then, the planners go on until the first one arrives (at most to the budget's end).
   double plan_fraction = -1;
-  // Planner runs at once; 0: merge.threads (all cores if that is 0).
+  // Planner runs at once, at most; 0: merge.threads (all cores if that is 0). Fewer run when
+  // start_beside refuses tasks (a busy pool).
   int parallel = 0;
+  // Starts `task` (planner runs, one after the other until none is left) on another thread now
+  // and returns true, or returns false without running it when no thread is free for it (the
+  // server's worker pool: every worker busy, or its admission queue full). Called from the
+  // calling thread only. Unset: each task gets a std::thread of its own. While fewer than
+  // `parallel` tasks go on and no path waits to be merged, the calling thread plans a run
+  // itself: a pool of one worker plans one run at a time, between merges. Every task has
+  // returned when Solve returns or throws.
+  std::function<bool(std::function<void()>)> start_beside;
   uint64_t seed = 1;  // run i plans with seed PlanAttemptSeed(seed, i)
   double resolution = kDefaultResolution;
   // How the planners check their motions. kDiscrete (OMPL's own check at the resolution's
@@ -124,6 +138,10 @@ struct SolveResult {
   double plan_ms = 0;             // when the last planner stopped
   double elapsed_ms = 0;
   int updates = 0;  // on_update calls
+  // The most planner runs that went on at once (at most `parallel`), and how many of the runs
+  // the calling thread ran itself (start_beside refused them).
+  int most_runs_at_once = 0;
+  int runs_on_caller = 0;
 };
 
 // Resolves the request's defaults (portfolio, plan fraction, parallel runs) and validates it:

@@ -2,7 +2,8 @@
 // seed, Solve with several portfolios, and OMPL's optimizing planners alone (BIT*, RRT*, PRM*,
 // given the whole budget), each output certified by our own CheckPaths (a path that fails it
 // counts as none). The methods alternate (the order rotates with the seed). Prints and writes
-// results.md and results.json to --out after every scene. Never asserts: see README.md.
+// results.md, results.json and results.svg (certified length against time, with Solve's anytime
+// curves) to --out after every scene. Never asserts: see README.md.
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
@@ -54,6 +55,8 @@ struct Run {
   bool found = false;      // a path came back
   bool certified = false;  // and CheckPaths certified it
   int inputs = 0;          // Solve: paths merged
+  // Solve: the best certified path so far against the time (ms, length), from its updates.
+  std::vector<std::pair<double, double>> curve;
 };
 
 std::vector<Method> AllMethods() {
@@ -65,6 +68,8 @@ std::vector<Method> AllMethods() {
       {.name = "solve-bitstar", .portfolio = {{P::kBITStar, 2}}},
       {.name = "solve-bitstar-rrtstar", .portfolio = {{P::kBITStar, 2}, {P::kRRTStar, 1}}},
       {.name = "solve-prm-bitstar", .portfolio = {{P::kPRM, 4}, {P::kBITStar, 2}}},
+      {.name = "solve-mixed", .portfolio = {{P::kPRM, 2}, {P::kBITStar, 1}, {P::kRRTStar, 1}}},
+      {.name = "solve-prm4-mixed", .portfolio = {{P::kPRM, 4}, {P::kBITStar, 1}, {P::kRRTStar, 1}}},
       {.name = "solve-f50", .plan_fraction = 0.5},
       {.name = "solve-f90", .plan_fraction = 0.9},
       {.name = "bitstar", .solve = false, .planner = P::kBITStar},
@@ -103,15 +108,19 @@ Run RunOnce(const Method& m, const Problem& p, double budget_s, uint64_t seed, i
   Run run;
   const auto t0 = std::chrono::steady_clock::now();
   if (m.solve) {
-    const SolveResult r = Solve(*p.planner, SolveRequest{.start = *p.scene->start,
-                                                         .goal = *p.scene->goal,
-                                                         .merge = {.threads = parallel},
-                                                         .budget_s = budget_s,
-                                                         .portfolio = m.portfolio,
-                                                         .plan_fraction = m.plan_fraction,
-                                                         .parallel = parallel,
-                                                         .seed = seed,
-                                                         .resolution = p.resolution});
+    const SolveResult r =
+        Solve(*p.planner, SolveRequest{.start = *p.scene->start,
+                                       .goal = *p.scene->goal,
+                                       .merge = {.threads = parallel},
+                                       .budget_s = budget_s,
+                                       .portfolio = m.portfolio,
+                                       .plan_fraction = m.plan_fraction,
+                                       .parallel = parallel,
+                                       .seed = seed,
+                                       .resolution = p.resolution,
+                                       .on_update = [&](const SolveUpdate& u) {
+                                         run.curve.emplace_back(u.elapsed_ms, u.objective);
+                                       }});
     run.ms = MsSince(t0);
     run.found = r.found;
     run.inputs = static_cast<int>(r.inputs.size());
@@ -229,6 +238,15 @@ std::string Json(const Results& results) {
         for (size_t i = 0; i < c.runs.size(); ++i) o << (i ? ", " : "") << Num(c.runs[i].ms, 6);
         o << "], \"inputs\": [";
         for (size_t i = 0; i < c.runs.size(); ++i) o << (i ? ", " : "") << c.runs[i].inputs;
+        o << "], \"curves\": [";
+        for (size_t i = 0; i < c.runs.size(); ++i) {
+          o << (i ? ", " : "") << "[";
+          for (size_t k = 0; k < c.runs[i].curve.size(); ++k) {
+            o << (k ? ", " : "") << "[" << Num(c.runs[i].curve[k].first, 6) << ", "
+              << Num(c.runs[i].curve[k].second, 8) << "]";
+          }
+          o << "]";
+        }
         o << "], \"uncertified\": " << c.uncertified() << "}";
       }
       o << "}}";
@@ -239,6 +257,114 @@ std::string Json(const Results& results) {
   return o.str();
 }
 
+// One panel per scene: certified length against wall time (log scale). Every run's result is a
+// dot at its wall time (a path that failed CheckPaths, or none, is left out); Solve's runs also
+// draw their anytime curve, the best certified path so far from its updates (the last point is
+// the result CheckPaths judged). The single planners return one path at the end of their time.
+std::string Svg(const Results& results, const std::vector<Method>& methods) {
+  const std::vector<std::string> colors = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd",
+                                           "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22", "#17becf",
+                                           "#aec7e8", "#ffbb78", "#98df8a"};
+  const double panel_w = 420, panel_h = 260, left = 60, top = 40, gap = 70;
+  const int columns = 2;
+  const int panels = static_cast<int>(results.size());
+  const int rows = (panels + columns - 1) / columns;
+  const double legend_h = 18 * static_cast<double>(methods.size()) + 20;
+  const double width = left + columns * (panel_w + gap);
+  const double height = top + rows * (panel_h + gap) + legend_h;
+  std::ostringstream o;
+  o << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width << "\" height=\"" << height
+    << "\" font-family=\"sans-serif\" font-size=\"11\">\n<rect width=\"100%\" height=\"100%\" "
+       "fill=\"white\"/>\n<text x=\""
+    << left
+    << "\" y=\"20\" font-size=\"14\">Certified length against wall time (every seed and "
+       "budget; lines: Solve's best path so far)</text>\n";
+  const auto color_of = [&](const std::string& name) {
+    for (size_t i = 0; i < methods.size(); ++i) {
+      if (methods[i].name == name) return colors[i % colors.size()];
+    }
+    return std::string("black");
+  };
+  int index = 0;
+  for (const auto& [scene, budgets] : results) {
+    const double x0 = left + (index % columns) * (panel_w + gap);
+    const double y0 = top + (index / columns) * (panel_h + gap);
+    ++index;
+    double lo = kInf, hi = 0, t_hi = 0;
+    for (const auto& [budget, cells] : budgets) {
+      t_hi = std::max(t_hi, budget * 1.15);
+      for (const auto& [name, c] : cells) {
+        for (const Run& r : c.runs) {
+          if (r.certified) {
+            lo = std::min(lo, r.length);
+            hi = std::max(hi, r.length);
+          }
+          for (const auto& point : r.curve) {
+            lo = std::min(lo, point.second);
+            hi = std::max(hi, point.second);
+          }
+        }
+      }
+    }
+    o << "<text x=\"" << x0 << "\" y=\"" << y0 - 6 << "\" font-size=\"12\">" << scene
+      << "</text>\n<rect x=\"" << x0 << "\" y=\"" << y0 << "\" width=\"" << panel_w
+      << "\" height=\"" << panel_h << "\" fill=\"none\" stroke=\"#999\"/>\n";
+    if (!(hi > 0)) continue;
+    const double t_lo = 0.05;
+    hi = std::min(hi, lo * 4);  // a far outlier would flatten the rest (drawn at the top)
+    const double pad = (hi - lo) * 0.08 + 1e-9;
+    const double y_lo = lo - pad, y_hi = hi + pad;
+    const auto X = [&](double ms) {
+      const double t = std::clamp(ms / 1e3, t_lo, t_hi);
+      return x0 + panel_w * std::log(t / t_lo) / std::log(t_hi / t_lo);
+    };
+    const auto Y = [&](double len) {
+      return y0 + panel_h * (1 - (std::min(len, y_hi) - y_lo) / (y_hi - y_lo));
+    };
+    for (double t : {0.1, 0.3, 1.0, 3.0, 10.0, 30.0, 100.0}) {
+      if (t > t_hi) break;
+      o << "<line x1=\"" << X(t * 1e3) << "\" x2=\"" << X(t * 1e3) << "\" y1=\"" << y0 << "\" y2=\""
+        << y0 + panel_h << "\" stroke=\"#eee\"/><text x=\"" << X(t * 1e3) << "\" y=\""
+        << y0 + panel_h + 14 << "\" text-anchor=\"middle\">" << Num(t) << " s</text>\n";
+    }
+    for (int k = 0; k <= 4; ++k) {
+      const double len = y_lo + (y_hi - y_lo) * k / 4;
+      o << "<text x=\"" << x0 - 4 << "\" y=\"" << Y(len) + 4 << "\" text-anchor=\"end\">"
+        << Num(len, 4) << "</text>\n";
+    }
+    for (const auto& [budget, cells] : budgets) {
+      for (const auto& [name, c] : cells) {
+        const std::string color = color_of(name);
+        for (const Run& r : c.runs) {
+          if (!r.curve.empty()) {
+            o << "<polyline fill=\"none\" stroke=\"" << color
+              << "\" stroke-opacity=\"0.6\" points=\"";
+            for (size_t k = 0; k < r.curve.size(); ++k) {
+              const double end_ms = k + 1 < r.curve.size() ? r.curve[k + 1].first : r.ms;
+              o << X(r.curve[k].first) << "," << Y(r.curve[k].second) << " " << X(end_ms) << ","
+                << Y(r.curve[k].second) << " ";
+            }
+            o << "\"/>\n";
+          }
+          if (r.certified) {
+            o << "<circle cx=\"" << X(r.ms) << "\" cy=\"" << Y(r.length) << "\" r=\"3.5\" fill=\""
+              << color << "\"><title>" << name << ", " << Num(budget) << " s: " << Num(r.length)
+              << " in " << Num(r.ms / 1e3, 3) << " s</title></circle>\n";
+          }
+        }
+      }
+    }
+  }
+  const double ly = top + rows * (panel_h + gap);
+  for (size_t i = 0; i < methods.size(); ++i) {
+    o << "<rect x=\"" << left << "\" y=\"" << ly + 18 * i << "\" width=\"12\" height=\"12\" fill=\""
+      << colors[i % colors.size()] << "\"/><text x=\"" << left + 18 << "\" y=\"" << ly + 18 * i + 10
+      << "\">" << methods[i].name << "</text>\n";
+  }
+  o << "</svg>\n";
+  return o.str();
+}
+
 void WriteFile(const fs::path& path, const std::string& text) {
   std::ofstream f(path);
   f << text;
@@ -246,7 +372,7 @@ void WriteFile(const fs::path& path, const std::string& text) {
 
 int Main(int argc, char** argv) {
   CLI::App app{"Solve against OMPL's optimizing planners alone at equal wall time"};
-  std::vector<std::string> scene_names = {"home", "office", "twisty", "car_maze"};
+  std::vector<std::string> scene_names = {"home", "office", "twisty", "car_maze", "flat"};
   std::vector<double> budgets = {1, 3, 10};
   std::vector<std::string> only;
   int seeds = 3;
@@ -296,6 +422,7 @@ int Main(int argc, char** argv) {
       }
       WriteFile(fs::path(out) / "results.md", Markdown(results, methods, command));
       WriteFile(fs::path(out) / "results.json", Json(results));
+      WriteFile(fs::path(out) / "results.svg", Svg(results, methods));
     }
   }
   std::cout << Markdown(results, methods, command);

@@ -376,6 +376,8 @@ def test_solve_streams_improvements_and_keeps_its_hgraph(client):
     assert sorted(r.index for r in runs) == [0, 1, 2, 3]
     assert {r.planner for r in runs} == {"prm", "rrtconnect"}
     assert len(solved.result.runs) == 4
+    # Two workers: at most one run beside the call's own worker, which plans too.
+    assert 1 <= solved.result.most_runs_at_once <= 2
     found = [r for r in solved.result.runs if r.found]
     # Every path found went into the H-Graph; the result is no longer than any certified input.
     assert 1 <= len(solved.result.merge.inputs) <= len(found)
@@ -399,6 +401,24 @@ def test_solve_streams_improvements_and_keeps_its_hgraph(client):
     assert len(client.get_hgraph(solved.hgraph).inputs) == len(found) + 1
     assert list(client.get_hgraph(solved.hgraph).inputs)[:len(found)] == [
         r.path_name for r in runs if r.found]
+
+
+def test_solve_plans_on_the_worker_pool_as_many_at_once_as_it_has_free_workers():
+    # A pool of one worker: the Solve's own job is the only worker, so every run is planned
+    # there, one at a time between merges, however many runs `parallel` allows.
+    s = Server("--threads", "1")
+    try:
+        with s.client() as c:
+            c.create_session(c.upload_scene(DATA / "scene.json"))
+            solved = c.solve(1.0, portfolio={"prm": 3, "rrtconnect": 1}, parallel=4, seed=5,
+                             start=[30, 62], goal=[67, 35], timeout=30)
+            assert solved.found, solved.result.message
+            started = [r for r in solved.result.runs if not r.message.startswith("not started")]
+            assert started
+            assert solved.result.most_runs_at_once == 1
+            assert solved.result.runs_on_call_worker == len(started)
+    finally:
+        assert s.stop() == 0, "".join(s.log)
 
 
 def test_solve_without_a_path_in_its_budget_says_no_path_was_found(client):

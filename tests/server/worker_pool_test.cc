@@ -54,6 +54,46 @@ TEST(WorkerPool, AdmitsUpToItsLimitThenRefuses) {
   EXPECT_EQ(pool.admitted(), 0);
 }
 
+// A job beside a call's runs only on an idle worker with a free admission slot, and holds the
+// slot while it runs: never queued behind other jobs.
+TEST(WorkerPool, RunsOnAnIdleWorkerOnlyAndHoldsASlotWhileItRuns) {
+  std::atomic<int> ran{0};
+  {
+    WorkerPool pool(2, 3);
+    Gate gate;
+    ASSERT_TRUE(pool.TrySubmit([&](WorkerPool::Slot&) {
+      gate.Wait();
+      ++ran;
+    }));
+    // One worker is idle: the job beside starts there and takes a second slot.
+    ASSERT_TRUE(pool.TryRunOnIdleWorker([&] {
+      gate.Wait();
+      ++ran;
+    }));
+    ASSERT_TRUE(gate.WaitForWaiting(2));
+    EXPECT_EQ(pool.admitted(), 2);
+    // Both workers busy: refused although an admission slot is free, and not run later.
+    EXPECT_FALSE(pool.TryRunOnIdleWorker([&] { ran += 100; }));
+    EXPECT_EQ(pool.admitted(), 2);
+    // A call still queues for a busy pool (its admission is separate).
+    ASSERT_TRUE(pool.TrySubmit([&](WorkerPool::Slot&) { ++ran; }));
+    EXPECT_EQ(pool.admitted(), 3);
+    gate.Open();
+    pool.WaitIdle();
+    EXPECT_EQ(ran.load(), 3);
+    EXPECT_EQ(pool.admitted(), 0);
+  }
+  // Idle workers but no free admission slot: refused.
+  WorkerPool pool(2, 1);
+  Gate gate;
+  ASSERT_TRUE(pool.TrySubmit([&](WorkerPool::Slot&) { gate.Wait(); }));
+  ASSERT_TRUE(gate.WaitForWaiting(1));
+  EXPECT_FALSE(pool.TryRunOnIdleWorker([&] { ran += 100; }));
+  gate.Open();
+  pool.WaitIdle();
+  EXPECT_EQ(ran.load(), 3);
+}
+
 // A job that releases its slot before its last steps lets the next call in at once.
 TEST(WorkerPool, AReleasedSlotAdmitsTheNextJobWhileTheFirstStillRuns) {
   WorkerPool pool(2, 1);

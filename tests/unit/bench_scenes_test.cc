@@ -27,7 +27,8 @@ struct BenchScene {
 const std::vector<BenchScene> kRealScenes = {{"home", ComponentType::kSE3},
                                              {"office", ComponentType::kSE3},
                                              {"twisty", ComponentType::kSE3},
-                                             {"car_maze", ComponentType::kSE2}};
+                                             {"car_maze", ComponentType::kSE2},
+                                             {"flat", ComponentType::kSE3}};
 
 int64_t Triangles(const Shape& shape) {
   return shape.type == ShapeType::kMesh ? static_cast<int64_t>(shape.mesh->triangles.size()) : 0;

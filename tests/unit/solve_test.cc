@@ -6,8 +6,11 @@
 
 #include <algorithm>
 #include <chrono>
+#include <condition_variable>
+#include <functional>
 #include <future>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <thread>
 #include <vector>
@@ -144,7 +147,7 @@ TEST_F(SolveTest, TheHGraphServesQueriesAndAdditions) {
   EXPECT_LE(result.session->Query({}).objective, again.objective + 1e-9);
 }
 
-// The default portfolio runs asymptotically optimal planners beside PRM.
+// The default portfolio runs every kind it names; from a long budget on, BIT* and RRT* beside PRM.
 TEST_F(SolveTest, DefaultPortfolioRunsEveryKindItNames) {
   SolveRequest request = MazeRequest();
   const SolveResult result = Solve(*maze_->planner, request);
@@ -157,10 +160,12 @@ TEST_F(SolveTest, DefaultPortfolioRunsEveryKindItNames) {
     EXPECT_TRUE(seen) << PlannerTypeName(e.planner);
   }
   EXPECT_EQ(static_cast<int>(result.runs.size()), runs);
-  // A long budget has room for more runs of the planners that stop at their first path.
-  int long_runs = 0;
-  for (const PortfolioEntry& e : DefaultPortfolio(2, kLongSolveBudgetS)) long_runs += e.runs;
-  EXPECT_GT(long_runs, runs);
+  // A long budget adds BIT* and RRT*, which use the planning time PRM's runs leave.
+  std::vector<PlannerType> kinds;
+  for (const PortfolioEntry& e : DefaultPortfolio(2, kLongSolveBudgetS)) kinds.push_back(e.planner);
+  EXPECT_EQ(kinds, (std::vector<PlannerType>{PlannerType::kPRM, PlannerType::kBITStar,
+                                             PlannerType::kRRTStar}));
+  for (const PortfolioEntry& e : DefaultPortfolio()) EXPECT_EQ(e.planner, PlannerType::kPRM);
 }
 
 TEST_F(SolveTest, BadRequestsNameTheField) {
@@ -200,6 +205,83 @@ TEST_F(SolveTest, BadRequestsNameTheField) {
   EXPECT_EQ(field_of(r).substr(0, 7), "goal | ");
 }
 
+// A pool with no free thread (start_beside refuses every task): the calling thread plans every
+// run itself, one at a time between merges, and still finds the certified path.
+TEST_F(SolveTest, APoolWithoutAFreeThreadPlansOneRunAtATimeOnTheCaller) {
+  SolveRequest request = MazeRequest();
+  request.portfolio = {{.planner = PlannerType::kPRM, .runs = 3},
+                       {.planner = PlannerType::kRRTConnect, .runs = 1}};
+  request.parallel = 4;
+  int offered = 0;
+  request.start_beside = [&](std::function<void()>) {
+    ++offered;
+    return false;
+  };
+  const SolveResult result = Solve(*maze_->planner, request);
+  ASSERT_TRUE(result.found) << result.message;
+  EXPECT_GE(offered, 1);
+  int started = 0;
+  for (const SolveRun& run : result.runs) started += run.status.rfind("not started", 0) ? 1 : 0;
+  EXPECT_GE(started, 1);
+  EXPECT_EQ(result.runs_on_caller, started);
+  EXPECT_EQ(result.most_runs_at_once, 1);
+}
+
+// A pool of one worker beside the caller (a thread that takes a task only while it has none):
+// at most two runs at once, however many `parallel` allows, and the worker's refusals are
+// planned by the caller.
+TEST_F(SolveTest, RunsGoToFreeWorkersOnlyAndTheCallerPlansTheRest) {
+  std::mutex mutex;
+  std::condition_variable ready;
+  std::function<void()> queued;
+  bool busy = false;
+  bool quit = false;
+  int ran = 0;
+  std::thread worker([&] {
+    std::unique_lock lock(mutex);
+    for (;;) {
+      ready.wait(lock, [&] { return quit || queued; });
+      if (!queued) return;
+      std::function<void()> task = std::move(queued);
+      queued = nullptr;
+      lock.unlock();
+      task();
+      lock.lock();
+      busy = false;
+      ++ran;
+    }
+  });
+  SolveRequest request = MazeRequest();
+  request.portfolio = {{.planner = PlannerType::kPRM, .runs = 6}};
+  request.parallel = 6;
+  int accepted = 0;
+  request.start_beside = [&](std::function<void()> task) {
+    std::lock_guard lock(mutex);
+    if (busy) return false;
+    busy = true;
+    queued = std::move(task);
+    ++accepted;
+    ready.notify_all();
+    return true;
+  };
+  const SolveResult result = Solve(*maze_->planner, request);
+  {
+    std::lock_guard lock(mutex);
+    quit = true;
+  }
+  ready.notify_all();
+  worker.join();
+  EXPECT_EQ(ran, accepted);
+  ASSERT_TRUE(result.found) << result.message;
+  EXPECT_GE(accepted, 1);
+  EXPECT_GE(result.most_runs_at_once, 1);
+  EXPECT_LE(result.most_runs_at_once, 2);
+  int started = 0;
+  for (const SolveRun& run : result.runs) started += run.status.rfind("not started", 0) ? 1 : 0;
+  EXPECT_LE(result.runs_on_caller, started);
+  EXPECT_GE(started, 1);
+}
+
 // No path exists between two rooms: the budget ends with a result that says so, not an error.
 TEST(SolveNoPathTest, ABudgetWithoutAPathEndsWithAResultThatSaysSo) {
   auto scene = std::make_shared<Scene>(Scene{
@@ -229,21 +311,26 @@ TEST(SolveNoPathTest, ABudgetWithoutAPathEndsWithAResultThatSaysSo) {
   for (const SolveRun& run : result.runs) EXPECT_FALSE(run.found);
 }
 
-// A cancel stops every planner (a 30 s budget of optimizing planners) and the call.
+// A cancel stops every planner (a 30 s budget of optimizing planners) and the call, whether the
+// runs go on threads of their own or on the calling thread (a pool with no free thread).
 TEST_F(SolveTest, CancelStopsEveryPlanner) {
-  SolveRequest request = MazeRequest();
-  request.budget_s = 30;
-  request.portfolio = {{.planner = PlannerType::kBITStar, .runs = 2},
-                       {.planner = PlannerType::kRRTStar, .runs = 2}};
-  request.parallel = 4;
-  auto solving = std::async(std::launch::async, [&] { return Solve(*maze_->planner, request); });
-  std::this_thread::sleep_for(std::chrono::milliseconds(200));
-  request.cancel.Cancel();
-  try {
-    solving.get();
-    FAIL() << "no error";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.code(), ErrorCode::kCancelled);
+  for (const bool pool_busy : {false, true}) {
+    SCOPED_TRACE(pool_busy ? "on the caller" : "on threads of their own");
+    SolveRequest request = MazeRequest();
+    request.budget_s = 30;
+    request.portfolio = {{.planner = PlannerType::kBITStar, .runs = 2},
+                         {.planner = PlannerType::kRRTStar, .runs = 2}};
+    request.parallel = 4;
+    if (pool_busy) request.start_beside = [](std::function<void()>) { return false; };
+    auto solving = std::async(std::launch::async, [&] { return Solve(*maze_->planner, request); });
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    request.cancel.Cancel();
+    try {
+      solving.get();
+      FAIL() << "no error";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), ErrorCode::kCancelled);
+    }
   }
 }
 

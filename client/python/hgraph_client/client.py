@@ -167,7 +167,8 @@ class PlanOutcome(list):
 @dataclasses.dataclass
 class SolveOutcome:
     # service_pb2.SolveResult: found, message (why not found), merge (the best path and its
-    # report, as a merge's result), runs (every planner run), plan_ms, elapsed_ms, budget_s.
+    # report, as a merge's result), runs (every planner run), plan_ms, elapsed_ms, budget_s,
+    # most_runs_at_once (planner runs at once on the worker pool), runs_on_call_worker.
     result: service_pb2.SolveResult
     # "sessions/<id>/hgraphs/<hgraph id>" of the H-Graph of every path found: pass it to
     # requery, add_paths, get_hgraph. Empty when no path was found or it was not kept.

@@ -1,7 +1,8 @@
 #!/usr/bin/python3
-"""Writes the benchmark's mesh problems of realistic size (issue 26): tests/bench/scenes/<name>/
-scene.json, world.obj and robot.obj. Standard library only, no randomness but a fixed-seed
-generator of our own; rerunning reproduces the files byte for byte. Prints the triangle counts.
+"""Writes the benchmark's mesh problems of realistic size (issues 26 and 31):
+tests/bench/scenes/<name>/scene.json, world.obj and robot.obj. Standard library only, no
+randomness but a fixed-seed generator of our own; rerunning reproduces the files byte for byte.
+Prints the triangle counts.
 
   home     SE(3): a table (172 triangles) carried from the living room to the bedroom of a
            four-room flat with furniture (1456 triangles: walls with 1 and 1.2 m doorways, sofa,
@@ -14,6 +15,11 @@ generator of our own; rerunning reproduces the files byte for byte. Prints the t
            tube (756 triangles): it rolls a quarter turn and back on the way.
   car_maze SE(2): a car (body, cabin, four wheels; 256 triangles) through a 7 x 7 perfect maze
            (768 triangles, corridors 1.6 wide) from one corner to the opposite one.
+  flat     SE(3): a sofa (184 triangles) from the living room into the study next door of a
+           furnished flat (1540 triangles): the door between them is 1.05 m wide for a sofa
+           0.8 deep, the way round through the hall has 1.6 m doorways and is three times as
+           long. The home-like problem where PRM's routes are poor (issue 31): its first paths
+           take the way round.
 
 The shapes are triangle meshes (boxes, prisms over convex outlines, cylinders, plates with
 holes), one world mesh and one robot mesh per problem, about the size of OMPL.app's problems,
@@ -308,6 +314,82 @@ def home():
                 [8.5, 5.2, 0.4] + yaw_quaternion(math.pi / 2), w, robot)
 
 
+def sofa_robot():
+    """A two-seat sofa 1.6 x 0.8 x 0.8 centred on the origin: base, back, arms, two seat
+    cushions, four round legs."""
+    m = Mesh()
+    zb = -0.4
+    m.box((-0.8, -0.4, zb + 0.12), (0.8, 0.4, zb + 0.42))         # base
+    m.box((-0.8, 0.22, zb + 0.42), (0.8, 0.4, zb + 0.8))          # back
+    for sx in (-1, 1):                                          # arms
+        m.box((sx * 0.8 - 0.14 * (sx > 0), -0.4, zb + 0.42),
+              (sx * 0.8 + 0.14 * (sx < 0), 0.22, zb + 0.62))
+    for k in range(2):                                          # seat cushions
+        m.box((-0.66 + 0.66 * k, -0.38, zb + 0.42), (0.0 + 0.66 * k, 0.22, zb + 0.5))
+    for sx in (-1, 1):
+        for sy in (-1, 1):
+            m.cylinder(0.03, zb, zb + 0.12, 8, move(sx * 0.72, sy * 0.32, 0))
+    return m
+
+
+def desk(m, t):
+    m.box((0, 0, 0.72), (1.4, 0.7, 0.76), t)          # top
+    m.box((0, 0, 0), (0.04, 0.7, 0.72), t)            # side panels
+    m.box((1.36, 0, 0), (1.4, 0.7, 0.72), t)
+    m.box((0.04, 0.66, 0.3), (1.36, 0.7, 0.72), t)    # modesty panel
+
+
+def flat():
+    """The home-like problem where PRM's routes are poor: the study is next to the living room,
+    but the door between them is narrow (1.05 m for a sofa 0.8 deep: it passes square to the
+    door only), while the way round through the hall has wide doorways. PRM's first paths take
+    the way round; a shorter path needs the narrow door."""
+    w = Mesh()
+    H = 2.6
+    # A 14 x 10 flat: living room (x < 7, y < 6), study (x > 7, y < 6), hall (y > 6) along
+    # both; doorways living-hall (x 3.2) and study-hall (x 10.8) 1.6 wide, living-study 1.05.
+    wall(w, (0, 0), (14, 0), 0.2, H)
+    wall(w, (0, 10), (14, 10), 0.2, H)
+    wall(w, (0, 0), (0, 10), 0.2, H)
+    wall(w, (14, 0), (14, 10), 0.2, H)
+    wall(w, (0, 6), (14, 6), 0.15, H, doors=[(3.2, 1.6), (10.8, 1.6)])
+    wall(w, (7, 0), (7, 6), 0.15, H, doors=[(2.6, 1.05)])
+    # Living room: sofa along the south wall, armchairs, low table, TV wall, shelf, plant.
+    sofa(w, move(0.6, 0.15, 0))
+    armchair(w, move(0.15, 2.2, 0, -math.pi / 2))      # back against the west wall
+    low_table(w, 1.2, 1.4, 1.1, 0.6, 0.45)
+    w.box((0.1, 4.3, 0), (0.55, 5.8, 0.5))             # TV stand along the west wall
+    w.box((0.25, 4.45, 0.5), (0.31, 5.65, 1.2))        # TV
+    shelf(w, move(6.9, 3.6, 0, math.pi / 2), 1.2, 0.35, 2.0, 5)
+    plant(w, 6.5, 0.5)
+    plant(w, 5.4, 5.5)
+    # Study: desk with a chair under the window, bookshelves along the east wall, a reading
+    # chair, a plant.
+    desk(w, move(9.0, 0.1, 0))
+    chair(w, move(9.5, 0.75, 0, 0))
+    shelf(w, move(13.9, 0.4, 0, math.pi / 2), 1.2, 0.35, 2.0, 5)
+    shelf(w, move(13.9, 1.7, 0, math.pi / 2), 1.2, 0.35, 2.0, 5)
+    armchair(w, move(13.05, 4.1, 0, -math.pi / 2))     # back against the east wall
+    plant(w, 7.5, 5.5)
+    # Hall: shoe cabinet, coat stand, console table, plants, a bench.
+    w.box((0.1, 9.5, 0), (1.4, 9.9, 1.0))
+    w.cylinder(0.03, 0, 1.8, 8, move(2.0, 9.7, 0))
+    w.cylinder(0.25, 0, 0.04, 12, move(2.0, 9.7, 0))
+    low_table(w, 6.2, 9.45, 1.6, 0.45, 0.8)
+    w.box((9.0, 9.5, 0), (10.6, 9.9, 0.45))            # bench
+    plant(w, 13.5, 9.5)
+    plant(w, 0.5, 6.5)
+    robot = sofa_robot()
+    desc = ("A sofa (1.6 x 0.8 x 0.8, round legs) carried from the living room into the study "
+            "next door in a 14 x 10 flat: the door between them is 1.05 m wide (the sofa passes "
+            "it square on only), the way round through the hall has 1.6 m doorways. Doorways "
+            "2.1 m high. SE(3); no floor, the space keeps the sofa below the lintels.")
+    space = {"type": "TYPE_SE3", "lower": [0.3, 0.3, 0.4], "upper": [13.7, 9.7, 1.2],
+             "name": "sofa"}
+    write_scene("flat", desc, space, [4.5, 2.6, 0.4, 0.0, 0.0, 0.0, 1.0],
+                [9.5, 3.0, 0.4] + yaw_quaternion(math.pi / 2), w, robot)
+
+
 def office_chair_robot():
     """An office chair about 0.64 x 0.64 x 1.0 centred on the origin: five-star base with
     casters, gas lift, seat, back and arms."""
@@ -500,6 +582,7 @@ def main():
     office()
     twisty()
     car_maze()
+    flat()
 
 
 if __name__ == "__main__":
