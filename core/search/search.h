@@ -35,22 +35,25 @@ struct SearchEdge {
 };
 using SearchEdgeFn = std::function<SearchEdge(int edge)>;
 
-// Lazy search (lazy weighted A*, and its widest-path analogue for bottleneck measures): an edge
-// enters the open list with its bound and is checked only when the search would settle a node
-// through it; then it goes back with its exact value, or with a tighter bound (a refinement in
-// steps, for bounds that are cheaper to tighten than to make exact). Returns the same optimum as
-// an eager search of the checked graph (Dijkstra, or the widest path then ShortestAmongWidest;
-// the tests hold it against one), with far fewer checks: once a node is
-// settled, no other edge into it is checked. `exact(e)` says whether `see(e)` is exact. An edge
-// also settles a node when its floor proves what the search needs: its bound (kSum), or a width
-// at least the node's (kBottleneck). `evaluate(edges, targets)` checks the edges so that `see` is
-// exact for them afterwards, or at least tighter (never looser), and exact after finitely many
-// calls; targets[i] is a value that decides edges[i] (kBottleneck: a width; a floor or a bound
-// that reaches past it settles the edge), or NaN. The search evaluates up to `batch` edges at a
-// time (the most promising ones), so a parallel `evaluate` keeps several threads busy.
-// `length_to_go`, if not null, holds per node a lower bound on the length to the goal: the
-// bottleneck search's tie break (the shortest of the widest paths) runs A* on it. The path's
-// edges are all exact, or proven, on return.
+// Lazy search: edges are seen through their bounds and checked only where the search needs them;
+// a check gives an edge its exact value, or a tighter bound (a refinement in steps, for bounds
+// that are cheaper to tighten than to make exact). Returns the same optimum as an eager search of
+// the checked graph (Dijkstra, or the widest path then ShortestAmongWidest; the tests hold it
+// against one), with far fewer checks. A sum (kSum) runs LazySP: the shortest path under what is
+// known, then a check of its first edges that are not settled, again until the shortest path is
+// settled all along, so that only edges of start-goal paths shorter than the answer are ever
+// checked. A widest search (kBottleneck) runs lazy weighted A*'s analogue: an edge enters the
+// open list with its bound and is checked when the search would settle a node through it (once
+// a node is settled, no other edge into it is checked); so does the tie break among the widest.
+// `exact(e)` says whether `see(e)` is exact. An edge also settles a node when its floor proves
+// what the search needs: its bound (kSum), or a width at least the node's (kBottleneck).
+// `evaluate(edges, targets)` checks the edges so that `see` is exact for them afterwards, or at
+// least tighter (never looser), and exact after finitely many calls; targets[i] is a value that
+// decides edges[i] (kBottleneck: a width; a floor or a bound that reaches past it settles the
+// edge), or NaN. The search evaluates up to `batch` edges at a time (the most promising ones),
+// so a parallel `evaluate` keeps several threads busy. `length_to_go`, if not null, holds per
+// node a lower bound on the length to the goal: the bottleneck search's tie break (the shortest
+// of the widest paths) runs A* on it. The path's edges are all exact, or proven, on return.
 using ExactFn = std::function<bool(int edge)>;
 using EvaluateFn =
     std::function<void(const std::vector<int>& edges, const std::vector<double>& targets)>;

@@ -8,8 +8,10 @@
 #include <functional>
 #include <limits>
 #include <random>
+#include <vector>
 
 #include "core/hgraph/hgraph.h"
+#include "core/path/path.h"
 #include "tests/unit/search_oracle.h"
 
 namespace hgraph {
@@ -202,6 +204,54 @@ TEST_P(SearchPropertyTest, LazySearchWithFloorsFindsTheExhaustiveOptimum) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Seeds, SearchPropertyTest, ::testing::Range(1, 41));
+
+// A sum's lazy search checks edges of start-goal routes shorter than the answer only: a bridge
+// that would shorten the path is checked (and found invalid), a short edge into a dead end is
+// not, though A* would settle the dead end (its key is below the answer's) and check it.
+TEST(SearchTest, LazySumSearchChecksOnlyEdgesOfShorterRoutes) {
+  const Space space = Plane();
+  HGraph graph(space, {InputPath{.waypoints = {P(0, 0), P(5, 4), P(10, 0)}}}, 0);
+  for (int e : graph.path_edges(0)) SetReport(graph, space, e, {1, 1});
+  const int bridge = graph.AddEdge(graph.start(), graph.goal(), false);
+  const int dead_end = graph.AddNode(P(4, -1));
+  const int into_dead_end = graph.AddEdge(graph.start(), dead_end, false);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const SearchEdgeFn see = [&](int e) {
+    const EdgeReport& report = graph.edge(e).report;
+    const double length =
+        space.Distance(graph.node(graph.edge(e).u).q, graph.node(graph.edge(e).v).q);
+    if (report.state == EdgeState::kInvalid) return SearchEdge{.value = nan, .length = length};
+    return SearchEdge{.value = length,
+                      .length = length,
+                      .floor = report.state == EdgeState::kValid ? length : nan};
+  };
+  const ExactFn exact = [&](int e) { return graph.edge(e).report.state != EdgeState::kUnchecked; };
+  std::vector<int> checked;
+  const EvaluateFn evaluate = [&](const std::vector<int>& edges, const std::vector<double>&) {
+    for (int e : edges) {
+      checked.push_back(e);
+      if (e == bridge) {
+        graph.mutable_edge(e).report.state = EdgeState::kInvalid;
+      } else {
+        SetReport(graph, space, e, {1, 1});
+      }
+    }
+  };
+  std::vector<double> to_go(graph.num_nodes());
+  for (int v = 0; v < graph.num_nodes(); ++v) {
+    to_go[v] = space.Distance(graph.node(v).q, graph.node(graph.goal()).q);
+  }
+  // The dead end's key (its distance from the start plus its distance to the goal) is below the
+  // input path's length, the answer.
+  ASSERT_LT(space.Distance(P(0, 0), P(4, -1)) + to_go[dead_end], PathLength(space, graph.path(0)));
+  const auto measure = Measure::Make(MeasureSpec{.type = MeasureType::kLength});
+  const SearchResult lazy =
+      FindBestPathLazy(graph, *measure, see, exact, evaluate, &to_go, nullptr, 8, nullptr);
+  ASSERT_TRUE(lazy.found);
+  EXPECT_EQ(lazy.edges, graph.path_edges(0));
+  EXPECT_EQ(checked, std::vector<int>{bridge});
+  EXPECT_EQ(graph.edge(into_dead_end).report.state, EdgeState::kUnchecked);
+}
 
 TEST(SearchTest, InvalidEdgesAreNeverUsed) {
   const Space space = Plane();
