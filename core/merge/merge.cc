@@ -25,10 +25,10 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// Edges the lazy search checks at a time (core/search/search.h): enough to keep the worker
-// threads busy, few enough that little is checked on speculation. Fixed, so that the checks and
-// the counts do not depend on the thread count. On grid (three PRM inputs, all-pairs) batches of
-// 1, 2, 4 and 8 check 9654, 9661, 9665 and 9682 edges.
+// Edges the widest lazy search checks at a time (core/search/search.h; a sum's checks one):
+// enough to keep the worker threads busy, few enough that little is checked on speculation. Fixed,
+// so that the checks and the counts do not depend on the thread count. On grid (three PRM inputs,
+// all-pairs) batches of 1, 2, 4 and 8 check 9654, 9661, 9665 and 9682 edges.
 constexpr int kLazyBatch = 8;
 
 // What a check report says of its motion, in one byte: 0 unchecked, else its state, whether

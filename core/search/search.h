@@ -40,20 +40,21 @@ using SearchEdgeFn = std::function<SearchEdge(int edge)>;
 // that are cheaper to tighten than to make exact). Returns the same optimum as an eager search of
 // the checked graph (Dijkstra, or the widest path then ShortestAmongWidest; the tests hold it
 // against one), with far fewer checks. A sum (kSum) runs LazySP: the shortest path under what is
-// known, then a check of its first edges that are not settled, again until the shortest path is
+// known, then a check of its first edge that is not settled, again until the shortest path is
 // settled all along, so that only edges of start-goal paths shorter than the answer are ever
 // checked. A widest search (kBottleneck) runs lazy weighted A*'s analogue: an edge enters the
 // open list with its bound and is checked when the search would settle a node through it (once
-// a node is settled, no other edge into it is checked); so does the tie break among the widest.
+// a node is settled, no other edge into it is checked), up to `batch` edges at a time (the most
+// promising ones), so that a parallel `evaluate` keeps several threads busy; so does the tie
+// break among the widest.
 // `exact(e)` says whether `see(e)` is exact. An edge also settles a node when its floor proves
 // what the search needs: its bound (kSum), or a width at least the node's (kBottleneck).
 // `evaluate(edges, targets)` checks the edges so that `see` is exact for them afterwards, or at
 // least tighter (never looser), and exact after finitely many calls; targets[i] is a value that
 // decides edges[i] (kBottleneck: a width; a floor or a bound that reaches past it settles the
-// edge), or NaN. The search evaluates up to `batch` edges at a time (the most promising ones),
-// so a parallel `evaluate` keeps several threads busy. `length_to_go`, if not null, holds per
-// node a lower bound on the length to the goal: the bottleneck search's tie break (the shortest
-// of the widest paths) runs A* on it. The path's edges are all exact, or proven, on return.
+// edge), or NaN. `length_to_go`, if not null, holds per node a lower bound on the length to the
+// goal: the bottleneck search's tie break (the shortest of the widest paths) runs A* on it. The
+// path's edges are all exact, or proven, on return.
 using ExactFn = std::function<bool(int edge)>;
 using EvaluateFn =
     std::function<void(const std::vector<int>& edges, const std::vector<double>& targets)>;
