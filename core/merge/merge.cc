@@ -18,6 +18,7 @@
 #include "core/merge/search_view.h"
 #include "core/merge/shortcut.h"
 #include "core/merge/stored_input.h"
+#include "core/search/glance.h"
 #include "core/search/search.h"
 
 namespace hgraph {
@@ -271,9 +272,11 @@ SearchResult HybridizationSession::SearchBest(const Measure& measure, EdgeProof 
       view.Forget(edges);
       checking_ms += MsSince(checking);
     };
-    SearchResult best = FindBestPathLazy(graph_, measure, view.see(), view.exact(), evaluate,
-                                         cost_to_go.empty() ? nullptr : &cost_to_go,
-                                         &evidence_.goal_distance, kLazyBatch, &lazy);
+    const GlanceFn glance = view.glance();
+    SearchResult best =
+        FindBestPathLazy(graph_, measure, view.see(), view.exact(), evaluate,
+                         cost_to_go.empty() ? nullptr : &cost_to_go, &evidence_.goal_distance,
+                         kLazyBatch, &lazy, glance, nullptr);
     result->stats.search_rounds += lazy.evaluations + 1;
     result->timing.check_ms += checking_ms;
     result->timing.search_ms += MsSince(phase) - checking_ms;

@@ -2,6 +2,8 @@
 
 #include <limits>
 
+#include "core/measure/glance.h"
+
 namespace hgraph {
 
 SearchView::SearchView(const HGraph& graph, const EdgeEvidence& evidence, const Measure& measure,
@@ -42,6 +44,11 @@ bool SearchView::Exact(int e) const {
   const EdgeReport& report = graph_.edge(e).report;
   return !Usable(report) || (report.state == EdgeState::kValid &&
                              (!measure_.needs_clearance() || report.has_clearance));
+}
+
+std::optional<double> SearchView::Glance(int e) {
+  if (seen_now_[e] || Exact(e)) return std::nullopt;
+  return EdgeGlance(measure_, evaluator_.BoundInput(e, measure_.uses_ceilings()));
 }
 
 SearchEdge SearchView::Look(int e) {

@@ -3,6 +3,7 @@
 // others by the measure's bound (LazyEdgeEvaluator::BoundInput). Internal to core/merge.
 #pragma once
 
+#include <optional>
 #include <vector>
 
 #include "core/hgraph/hgraph.h"
@@ -10,6 +11,7 @@
 #include "core/merge/edge_evaluator.h"
 #include "core/merge/evidence.h"
 #include "core/merge/path_check.h"
+#include "core/search/glance.h"
 #include "core/search/search.h"
 
 namespace hgraph {
@@ -37,6 +39,11 @@ class SearchView {
     return [this](int e) { return Exact(e); };
   }
   SearchEdgeFn see();
+  // The measure's cheaper bound (EdgeGlance, core/measure/glance.h) of an edge not seen yet that
+  // is usable and not exact; nullopt otherwise (see() then costs no more).
+  GlanceFn glance() {
+    return [this](int e) { return Glance(e); };
+  }
   // The edges were checked: they are looked at again.
   void Forget(const std::vector<int>& edges);
 
@@ -44,6 +51,7 @@ class SearchView {
   bool Usable(const EdgeReport& report) const;
   bool Exact(int e) const;
   SearchEdge Look(int e);
+  std::optional<double> Glance(int e);
 
   const HGraph& graph_;
   const EdgeEvidence& evidence_;

@@ -18,8 +18,9 @@ namespace {
 constexpr char kMagic[8] = {'H', 'G', 'S', 'E', 'S', 'S', 'N', '\0'};
 
 // Fixed-width little-endian fields (every machine we build for is little-endian; the format
-// says so, and a big-endian reader would have to swap). Without a buffer it only counts the
-// bytes (the first pass); with one it writes them there (the second, into a buffer of exactly
+// says so, and a big-endian reader would have to swap), and counts as variable-length integers
+// (LEB128: seven bits a byte, low bits first; one byte up to 127). Without a buffer it only counts
+// the bytes (the first pass); with one it writes them there (the second, into a buffer of exactly
 // that size: no growth and no copy of what is written).
 class Writer {
  public:
@@ -32,7 +33,11 @@ class Writer {
     if (out_ != nullptr) std::memcpy(out_ + at_, &value, sizeof(T));
     at_ += sizeof(T);
   }
-  void Size(size_t n) { Pod<uint64_t>(n); }
+  void Size(size_t n) { Varint(n); }
+  void Varint(uint64_t n) {
+    for (; n >= 0x80; n >>= 7) Pod<uint8_t>(static_cast<uint8_t>(n | 0x80));
+    Pod<uint8_t>(static_cast<uint8_t>(n));
+  }
   void Str(const std::string& s) {
     Size(s.size());
     Bytes(s.data(), s.size());
@@ -95,9 +100,24 @@ class Reader {
   // A count of items of at least `item_bytes` bytes each: never more than the bytes left hold,
   // so that a forged count cannot make the reader allocate what the bytes do not back.
   size_t Size(size_t item_bytes = 1) {
-    const auto n = Pod<uint64_t>();
+    const uint64_t n = Varint();
     if (item_bytes > 0 && n > (in_.size() - at_) / item_bytes) Fail("a count past the end");
     return static_cast<size_t>(n);
+  }
+  // What Writer::Varint wrote: at most ten bytes, the last not zero unless it is the only one
+  // (one encoding per value), and no bit past the 64th.
+  uint64_t Varint() {
+    uint64_t n = 0;
+    for (int shift = 0;; shift += 7) {
+      const auto byte = Pod<uint8_t>();
+      if (shift == 63 && byte > 1) Fail("a count past 64 bits");
+      n |= static_cast<uint64_t>(byte & 0x7f) << shift;
+      if ((byte & 0x80) == 0) {
+        if (byte == 0 && shift > 0) Fail("a count of more bytes than it needs");
+        return n;
+      }
+      if (shift == 63) Fail("a count past 64 bits");
+    }
   }
   int Index(int end, const char* what) {
     const auto i = Pod<int32_t>();
@@ -183,8 +203,9 @@ void WriteReport(Writer& w, const EdgeReport& r) {
   w.Samples(r.profile);
   w.Pod<double>(r.invalid_at);
   w.Pod<uint8_t>(r.certified ? 1 : 0);
-  w.Pod<int64_t>(r.collision_checks);
-  w.Pod<int64_t>(r.distance_queries);
+  HGRAPH_CHECK(r.collision_checks >= 0 && r.distance_queries >= 0);
+  w.Varint(static_cast<uint64_t>(r.collision_checks));
+  w.Varint(static_cast<uint64_t>(r.distance_queries));
 }
 
 EdgeReport ReadReport(Reader& r) {
@@ -200,8 +221,11 @@ EdgeReport ReadReport(Reader& r) {
   }
   report.invalid_at = r.Pod<double>();
   report.certified = r.Pod<uint8_t>() != 0;
-  report.collision_checks = r.Pod<int64_t>();
-  report.distance_queries = r.Pod<int64_t>();
+  for (int64_t* count : {&report.collision_checks, &report.distance_queries}) {
+    const uint64_t n = r.Varint();
+    if (n > static_cast<uint64_t>(std::numeric_limits<int64_t>::max())) r.Fail("a check count");
+    *count = static_cast<int64_t>(n);
+  }
   return report;
 }
 

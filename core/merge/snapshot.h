@@ -19,7 +19,7 @@
 namespace hgraph {
 
 // Bumped whenever the layout changes: bytes of another format are refused, not misread.
-inline constexpr uint32_t kSnapshotFormat = 3;
+inline constexpr uint32_t kSnapshotFormat = 4;
 
 // Bytes that are not a snapshot this code can load (truncated, another format, indices out of
 // range, configurations of another space). Copyable.

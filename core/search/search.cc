@@ -6,6 +6,7 @@
 #include <queue>
 
 #include "core/common/error.h"
+#include "core/search/glance.h"
 
 namespace hgraph {
 namespace {
@@ -27,7 +28,9 @@ constexpr double kFirstCapDivisor = 16;
 // width so far) from the edge's bound or its exact value. Entries of equal key (many, under a
 // widest search's cap) go by `rank`: an edge that settles the node without a check first, then
 // one checked valid, then the others (widest searches only); and then by `tie`, the node's length
-// to go, and by node and edge ids.
+// to go, and by node and edge ids. A `coarse` entry's key comes from the edge's glance (a sum
+// search's cheaper bound, GlanceFn): it goes before every entry of equal key, and when it comes
+// out it goes back with the key its bound gives.
 struct LazyEntry {
   double key = 0;
   double parent_value = 0;
@@ -35,6 +38,7 @@ struct LazyEntry {
   int edge = -1;
   int rank = 0;
   double tie = 0;
+  bool coarse = false;
 };
 
 // The lazy search over one combine rule. `kWidest`: maximise the minimum edge value, each capped
@@ -47,7 +51,8 @@ class LazySearch {
   LazySearch(const HGraph& graph, const SearchEdgeFn& see, const ExactFn& exact,
              const EvaluateFn& evaluate, const std::vector<double>* cost_to_go,
              const std::vector<double>* length_to_go, double cap, double target, int batch,
-             LazySearchStats* stats)
+             LazySearchStats* stats, const GlanceFn* glance = nullptr,
+             GlanceStats* glance_stats = nullptr)
       : graph_(graph),
         see_(see),
         exact_(exact),
@@ -58,6 +63,8 @@ class LazySearch {
         target_(target),
         batch_(batch),
         stats_(stats),
+        glance_(kWidest ? nullptr : glance),
+        glance_stats_(glance_stats),
         value_(graph.num_nodes(), kWidest ? -1.0 : kInf),
         via_edge_(graph.num_nodes(), -1),
         closed_(graph.num_nodes(), 0) {}
@@ -73,6 +80,10 @@ class LazySearch {
       const LazyEntry top = open_.top();
       open_.pop();
       if (closed_[top.node]) continue;
+      if (top.coarse) {
+        Refine(top);
+        continue;
+      }
       if (top.edge >= 0 && !Settles(top.edge, see_(top.edge), top.key)) {
         // Check this edge and the next most promising unsettled ones together.
         Gather(top);
@@ -101,6 +112,8 @@ class LazySearch {
       // A sum search's path is the answer, so its ties go by one fixed rule whatever is known
       // (length to go, then node and edge ids): the same path whichever queries came before.
       if (kWidest && a.rank != b.rank) return a.rank > b.rank;
+      // A glance is at most the key its bound gives: an entry of that key after it.
+      if (a.coarse != b.coarse) return b.coarse;
       if (a.tie != b.tie) return a.tie > b.tie;
       if (a.node != b.node) return a.node > b.node;
       return a.edge > b.edge;
@@ -134,14 +147,36 @@ class LazySearch {
     }
   }
 
-  // Fills the entry's key and order from the edge as seen now; false if the edge is unusable.
-  bool Place(LazyEntry& entry) const {
+  // Fills the entry's key and order from the edge as seen now (`first`: its first look, through
+  // the glance where there is one); false if the edge is unusable.
+  bool Place(LazyEntry& entry, bool first = false) const {
+    entry.coarse = false;
+    if (first && glance_ != nullptr) {
+      if (const std::optional<double> glance = (*glance_)(entry.edge)) {
+        entry.key = KeyOf(entry.parent_value, *glance, entry.node);
+        if (std::isnan(entry.key)) return false;
+        entry.coarse = true;
+        entry.tie = length_to_go_ != nullptr ? (*length_to_go_)[entry.node] : 0.0;
+        if (glance_stats_ != nullptr) ++glance_stats_->glanced;
+        return true;
+      }
+    }
     const SearchEdge s = see_(entry.edge);
     entry.key = KeyOf(entry.parent_value, s.value, entry.node);
     if (std::isnan(entry.key)) return false;
     entry.rank = Settles(entry.edge, s, entry.key) ? 0 : s.checked ? 1 : 2;
     entry.tie = length_to_go_ != nullptr ? (*length_to_go_)[entry.node] : 0.0;
     return true;
+  }
+
+  // A coarse entry off the open list, back on it with the key its bound gives (never less than
+  // its glance: keys only grow).
+  void Refine(LazyEntry entry) {
+    const double glance = entry.key;
+    if (glance_stats_ != nullptr) ++glance_stats_->refined;
+    if (!Place(entry)) return;
+    entry.key = std::max(entry.key, glance);
+    open_.push(entry);
   }
 
   // Takes `top` and the next most promising entries that need a check off the open list, up to
@@ -154,6 +189,12 @@ class LazySearch {
       const LazyEntry& next = open_.top();
       if (closed_[next.node]) {
         open_.pop();
+        continue;
+      }
+      if (next.coarse) {
+        const LazyEntry entry = next;
+        open_.pop();
+        Refine(entry);
         continue;
       }
       if (next.edge < 0 || Settles(next.edge, see_(next.edge), next.key)) break;
@@ -204,7 +245,7 @@ class LazySearch {
     for (const auto& [v, e] : graph_.neighbours(top.node)) {
       if (closed_[v]) continue;
       LazyEntry entry{.parent_value = value_[top.node], .node = v, .edge = e};
-      if (Place(entry)) open_.push(entry);
+      if (Place(entry, /*first=*/true)) open_.push(entry);
     }
     return false;
   }
@@ -219,6 +260,8 @@ class LazySearch {
   const double target_;
   const int batch_;
   LazySearchStats* stats_;
+  const GlanceFn* glance_;
+  GlanceStats* glance_stats_;
   std::priority_queue<LazyEntry, std::vector<LazyEntry>, Worse> open_;
   std::vector<double> value_;
   std::vector<int> via_edge_;
@@ -231,8 +274,10 @@ class LazySearch {
   std::vector<double> targets_;
 };
 
-// The lazy search of a sum (LazySP, forward selector): the shortest path under what is known now
-// (the bounds of unchecked edges), then a check of its first edge that is not settled, until the
+// The lazy search of a sum whose bounds cost nothing beside a check, length's (LazySP, forward
+// selector; the other sums' bounds cost more to compute, and LazySearch<false> with its glance
+// computes fewer of them): the shortest path under what is known now (the bounds of unchecked
+// edges), then a check of its first edge that is not settled, until the
 // shortest path is settled all along. Unlike LazySearch<false>, which settles every node whose key
 // is below the optimum and so checks an edge into each (nodes off every short route too), it checks
 // edges of short start-goal paths only. A search costs little beside a check (tens of microseconds
@@ -359,18 +404,23 @@ class LazyShortestPath {
   std::vector<LazyEntry> heap_;
 };
 
-}  // namespace
-
-SearchResult FindBestPathLazy(const HGraph& graph, const Measure& measure, const SearchEdgeFn& see,
-                              const ExactFn& exact, const EvaluateFn& evaluate,
-                              const std::vector<double>* cost_to_go,
-                              const std::vector<double>* length_to_go, int batch,
-                              LazySearchStats* stats) {
+// FindBestPathLazy, with a glance or without (null).
+SearchResult SearchLazily(const HGraph& graph, const Measure& measure, const SearchEdgeFn& see,
+                          const ExactFn& exact, const EvaluateFn& evaluate,
+                          const std::vector<double>* cost_to_go,
+                          const std::vector<double>* length_to_go, int batch,
+                          LazySearchStats* stats, const GlanceFn* glance,
+                          GlanceStats* glance_stats) {
   batch = std::max(1, batch);
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  if (measure.combine() == Measure::Combine::kSum) {
+  if (measure.combine() == Measure::Combine::kSum && !measure.needs_clearance()) {
     return LazyShortestPath(graph, see, exact, evaluate, cost_to_go, measure.clearance_target(),
                             stats)
+        .Run();
+  }
+  if (measure.combine() == Measure::Combine::kSum) {
+    return LazySearch<false>(graph, see, exact, evaluate, cost_to_go, nullptr, kInf,
+                             measure.clearance_target(), batch, stats, glance, glance_stats)
         .Run();
   }
   // The widest path's width W, exactly. Whether W >= t needs of an edge only a proof that it
@@ -417,6 +467,27 @@ SearchResult FindBestPathLazy(const HGraph& graph, const Measure& measure, const
   if (!result.found) return widest;  // cannot happen: the widest path itself qualifies
   result.value = width;
   return result;
+}
+
+}  // namespace
+
+SearchResult FindBestPathLazy(const HGraph& graph, const Measure& measure, const SearchEdgeFn& see,
+                              const ExactFn& exact, const EvaluateFn& evaluate,
+                              const std::vector<double>* cost_to_go,
+                              const std::vector<double>* length_to_go, int batch,
+                              LazySearchStats* stats) {
+  return SearchLazily(graph, measure, see, exact, evaluate, cost_to_go, length_to_go, batch, stats,
+                      nullptr, nullptr);
+}
+
+SearchResult FindBestPathLazy(const HGraph& graph, const Measure& measure, const SearchEdgeFn& see,
+                              const ExactFn& exact, const EvaluateFn& evaluate,
+                              const std::vector<double>* cost_to_go,
+                              const std::vector<double>* length_to_go, int batch,
+                              LazySearchStats* stats, const GlanceFn& glance,
+                              GlanceStats* glance_stats) {
+  return SearchLazily(graph, measure, see, exact, evaluate, cost_to_go, length_to_go, batch, stats,
+                      &glance, glance_stats);
 }
 
 double WidestPathValue(const HGraph& graph, const SearchEdgeFn& edge) {

@@ -39,14 +39,15 @@ using SearchEdgeFn = std::function<SearchEdge(int edge)>;
 // a check gives an edge its exact value, or a tighter bound (a refinement in steps, for bounds
 // that are cheaper to tighten than to make exact). Returns the same optimum as an eager search of
 // the checked graph (Dijkstra, or the widest path then ShortestAmongWidest; the tests hold it
-// against one), with far fewer checks. A sum (kSum) runs LazySP: the shortest path under what is
-// known, then a check of its first edge that is not settled, again until the shortest path is
-// settled all along, so that only edges of start-goal paths shorter than the answer are ever
-// checked. A widest search (kBottleneck) runs lazy weighted A*'s analogue: an edge enters the
-// open list with its bound and is checked when the search would settle a node through it (once
-// a node is settled, no other edge into it is checked), up to `batch` edges at a time (the most
-// promising ones), so that a parallel `evaluate` keeps several threads busy; so does the tie
-// break among the widest.
+// against one), with far fewer checks. A sum that needs no clearance (length) runs LazySP: the
+// shortest path under what is known, then a check of its first edge that is not settled, again
+// until the shortest path is settled all along, so that only edges of start-goal paths shorter
+// than the answer are ever checked. The other sums, whose bounds cost more to compute and are
+// tightened in steps, and the widest search (kBottleneck) run lazy weighted A* (for widths its
+// analogue): an edge enters the open list with its bound and is checked when the search would
+// settle a node through it (once a node is settled, no other edge into it is checked), up to
+// `batch` edges at a time (the most promising ones), so that a parallel `evaluate` keeps several
+// threads busy; so does the tie break among the widest.
 // `exact(e)` says whether `see(e)` is exact. An edge also settles a node when its floor proves
 // what the search needs: its bound (kSum), or a width at least the node's (kBottleneck).
 // `evaluate(edges, targets)` checks the edges so that `see` is exact for them afterwards, or at

@@ -338,14 +338,14 @@ TEST_F(SharedStoreTest, RefusesCorruptAndForeignEntries) {
   const std::string key = SharedState::HGraphKey(merged.hgraph());
   const std::string good = *store_->Get(key);
   // A record of the layout before AddPaths' request ids were stored (tag HGRAPH1:), and a sound
-  // record whose snapshot is of the format before (2): refused as of another format, as the
+  // record whose snapshot is of the format before (3): refused as of another format, as the
   // damaged ones are.
   std::string old_layout = good;
   old_layout.replace(0, 8, "HGRAPH1:");
   std::string old_snapshot = good;
   const size_t magic = old_snapshot.rfind(std::string("HGSESSN\0", 8));
   ASSERT_NE(magic, std::string::npos);
-  old_snapshot[magic + 8] = 2;
+  old_snapshot[magic + 8] = 3;
   old_snapshot.replace(24, 64, Sha256Hex(std::string_view(old_snapshot).substr(88)));
   for (const std::string& bad :
        {std::string("garbage"), good.substr(0, good.size() / 2), good + "x",

@@ -7,11 +7,13 @@
 
 #include <functional>
 #include <limits>
+#include <optional>
 #include <random>
 #include <vector>
 
 #include "core/hgraph/hgraph.h"
 #include "core/path/path.h"
+#include "core/search/glance.h"
 #include "tests/unit/search_oracle.h"
 
 namespace hgraph {
@@ -201,6 +203,82 @@ TEST_P(SearchPropertyTest, LazySearchWithFloorsFindsTheExhaustiveOptimum) {
     }
   }
   EXPECT_GT(decided_inexact, 0);
+}
+
+// A sum search that glances at an edge first (core/search/glance.h) settles, checks and returns
+// what it would without: every batch of checks the same, in the same order, and the same path;
+// and it never sees some of the edges it glanced at. The glances are random fractions of the
+// bounds, some equal to them (ties with other entries).
+TEST_P(SearchPropertyTest, GlancesChangeNeitherTheChecksNorThePath) {
+  std::mt19937_64 rng(GetParam());
+  std::uniform_real_distribution<double> coin(0, 1);
+  const Space space = Plane();
+  HGraph graph = RandomHGraph(space, {3, 4, 5}, 0.6, rng);
+  const int n = graph.num_edges();
+  std::vector<double> bound(n), glance(n);
+  for (int e = 0; e < n; ++e) {
+    bound[e] = coin(rng);
+    glance[e] = coin(rng) < 0.2 ? 1.0 : coin(rng);
+  }
+  std::vector<double> to_go(graph.num_nodes());
+  for (int v = 0; v < graph.num_nodes(); ++v) {
+    to_go[v] = space.Distance(graph.node(v).q, graph.node(graph.goal()).q);
+  }
+  int64_t glanced = 0;
+  int64_t refined = 0;
+  for (const MeasureSpec spec : {MeasureSpec{.type = MeasureType::kInverseClearance, .k = 3},
+                                 MeasureSpec{.type = MeasureType::kLength}}) {
+    const auto measure = Measure::Make(spec);
+    const bool length = spec.type == MeasureType::kLength;
+    struct Run {
+      SearchResult found;
+      std::vector<std::vector<int>> batches;
+      int64_t seen = 0;
+    };
+    const auto search = [&](bool glancing) {
+      Run run;
+      std::vector<char> exact(n, 0);
+      const SearchEdgeFn see = [&](int e) {
+        ++run.seen;
+        const EdgeReport& report = graph.edge(e).report;
+        if (report.state != EdgeState::kValid)
+          return SearchEdge{.value = std::numeric_limits<double>::quiet_NaN(), .length = 1};
+        const double value = measure->EdgeValue(report);
+        return SearchEdge{.value = exact[e] ? value : value * bound[e], .length = report.length};
+      };
+      const ExactFn is_exact = [&](int e) {
+        return graph.edge(e).report.state != EdgeState::kValid || exact[e];
+      };
+      const EvaluateFn evaluate = [&](const std::vector<int>& edges, const std::vector<double>&) {
+        run.batches.push_back(edges);
+        for (int e : edges) exact[e] = 1;
+      };
+      const GlanceFn glancer = [&](int e) -> std::optional<double> {
+        const EdgeReport& report = graph.edge(e).report;
+        if (is_exact(e)) return std::nullopt;
+        return measure->EdgeValue(report) * bound[e] * glance[e];
+      };
+      GlanceStats stats;
+      const std::vector<double>* cost_to_go = length ? &to_go : nullptr;
+      run.found = glancing ? FindBestPathLazy(graph, *measure, see, is_exact, evaluate, cost_to_go,
+                                              &to_go, 3, nullptr, glancer, &stats)
+                           : FindBestPathLazy(graph, *measure, see, is_exact, evaluate, cost_to_go,
+                                              &to_go, 3, nullptr);
+      glanced += stats.glanced;
+      refined += stats.refined;
+      return run;
+    };
+    const Run plain = search(false);
+    const Run glancing = search(true);
+    ASSERT_EQ(plain.found.found, glancing.found.found) << MeasureTypeName(spec.type);
+    EXPECT_EQ(plain.found.nodes, glancing.found.nodes) << MeasureTypeName(spec.type);
+    EXPECT_EQ(plain.found.edges, glancing.found.edges) << MeasureTypeName(spec.type);
+    EXPECT_EQ(plain.found.value, glancing.found.value) << MeasureTypeName(spec.type);
+    EXPECT_EQ(plain.batches, glancing.batches) << MeasureTypeName(spec.type);
+    EXPECT_LE(glancing.seen, plain.seen) << MeasureTypeName(spec.type);
+  }
+  EXPECT_GT(glanced, 0);
+  EXPECT_LT(refined, glanced);
 }
 
 INSTANTIATE_TEST_SUITE_P(Seeds, SearchPropertyTest, ::testing::Range(1, 41));

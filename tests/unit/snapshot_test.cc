@@ -130,16 +130,20 @@ TEST_F(SnapshotTest, RefusesBytesItCannotTrust) {
   }
   EXPECT_THROW(LoadSession(planner_, bytes + "x"), SnapshotError);
   EXPECT_THROW(LoadSession(planner_, std::string(4096, '\xff')), SnapshotError);
-  // The format before (2: every ceiling stored, as doubles, with its witnesses) is refused,
-  // naming both formats.
-  std::string previous = bytes;
-  previous[8] = 2;
-  try {
-    LoadSession(planner_, previous);
-    FAIL() << "format 2 was loaded";
-  } catch (const SnapshotError& e) {
-    EXPECT_NE(std::string(e.what()).find("format 2, this server reads format 3"), std::string::npos)
-        << e.what();
+  // The formats before (2: every ceiling stored, as doubles, with its witnesses; 3: counts of
+  // eight bytes) are refused, naming both formats.
+  for (const int format : {2, 3}) {
+    std::string previous = bytes;
+    previous[8] = static_cast<char>(format);
+    try {
+      LoadSession(planner_, previous);
+      FAIL() << "format " << format << " was loaded";
+    } catch (const SnapshotError& e) {
+      EXPECT_NE(std::string(e.what()).find("format " + std::to_string(format) +
+                                           ", this server reads format 4"),
+                std::string::npos)
+          << e.what();
+    }
   }
 }
 
