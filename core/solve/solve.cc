@@ -29,7 +29,7 @@ constexpr double kHardStopShare = 0.05;
 // budget's end, for the query's own finish (the final search, the report).
 constexpr double kMarginShare = 0.03;
 constexpr double kMinMarginS = 0.005;
-// The latest a planner may plan while no path is known (RunBoard), as a share of the budget.
+// The latest a planner may plan while no path is certified (RunBoard), as a share of the budget.
 constexpr double kLastPlanShare = 0.9;
 // While planners run, each query's post-optimization gets at most this share of the budget, so
 // that the paths that arrive meanwhile wait little.
@@ -73,8 +73,9 @@ std::vector<PlannerType> RunOrder(const std::vector<PortfolioEntry>& portfolio) 
 // The planner runs, shared by the planner tasks and the merging thread. Thread safe.
 class RunBoard {
  public:
-  // Runs end by plan_end once a path is known, and by `last` (the budget's end, less the
-  // merge's margin) while none is.
+  // Runs end by plan_end once a query has certified a path (Certified), and by `last` (the
+  // budget's end, less the merge's margin) while none has: a path that fails the certified check
+  // and has no certified stretch from start to goal is no reason to stop planning.
   RunBoard(std::vector<PlannerType> order, int parallel, Clock::time_point started,
            Clock::time_point plan_end, Clock::time_point last)
       : order_(std::move(order)),
@@ -111,7 +112,6 @@ class RunBoard {
   void Finish(SolveRun run, InputPath path) {
     {
       std::lock_guard lock(mutex_);
-      found_ = found_ || !path.waypoints.empty();
       --running_;
       ended_.push_back({std::move(run), std::move(path)});
     }
@@ -131,6 +131,11 @@ class RunBoard {
     stopped_ = true;
   }
 
+  // A query has found a certified path from start to goal.
+  void Certified() {
+    std::lock_guard lock(mutex_);
+    found_ = true;
+  }
   bool found() const {
     std::lock_guard lock(mutex_);
     return found_;
@@ -195,7 +200,7 @@ class RunBoard {
   const Clock::time_point plan_end_;
   const Clock::time_point last_;
   mutable std::mutex mutex_;
-  bool found_ = false;  // a run has found a path
+  bool found_ = false;  // a query has certified a path
   std::condition_variable changed_;
   int next_ = 0;
   int optimizing_left_ = 0;
@@ -335,20 +340,21 @@ SolveResult Solve(const ClearanceChecker& checker, const SolveRequest& raw) {
   // The planners stop on a cancel only (each run's own time ends it within the planning time);
   // the merge also at the hard stop past the budget. A watcher passes the caller's cancel on.
   const CancelToken planners;
-  // The planning time ends at plan_end once some run has found a path (the planners still
-  // running return their best path then), or else when the first path arrives: a budget
-  // whose planning share finds nothing keeps planning rather than merging nothing.
+  // The planning time ends at plan_end once a query has certified a path (the planners still
+  // running return their best path then), or else when the first certified path is found: a
+  // budget whose planning share finds nothing certifiable keeps planning rather than merging
+  // paths that have no certified way from start to goal.
   const CancelToken finish;
   const CancelToken merging;
   merging.SetDeadline(at(budget * (1 + kHardStopShare)));
-  // While no path is known the planners may go on to kLastPlanShare of the budget: a path that
+  // While no path is certified the planners may go on to kLastPlanShare of the budget: a path that
   // arrives then still has time to be merged and reported, and a planner slow to stop (OMPL
   // polls its termination condition between iterations) still ends before the budget does.
   RunBoard board(RunOrder(request.portfolio), request.parallel, started, plan_end,
                  std::max(plan_end, at(budget * kLastPlanShare)));
   std::atomic<bool> finished{false};
-  // Passes the caller's cancel on, and ends the planning time at plan_end once a path is known
-  // (also while the calling thread plans a run itself).
+  // Passes the caller's cancel on, and ends the planning time at plan_end once a path is
+  // certified (also while the calling thread plans a run itself).
   std::thread watcher([&] {
     while (!finished.load()) {
       if (request.cancel.stopped()) {
@@ -424,6 +430,7 @@ SolveResult Solve(const ClearanceChecker& checker, const SolveRequest& raw) {
       // one is an update.
       const bool better = !best || measure->Better(r.quality, best->quality);
       if (better || !measure->Better(best->quality, r.quality)) best = std::move(r);
+      board.Certified();
       if (better) {
         ++out.updates;
         if (request.on_update) {
@@ -454,7 +461,7 @@ SolveResult Solve(const ClearanceChecker& checker, const SolveRequest& raw) {
         if (planned_here) ++out.runs_on_caller;
       }
       std::vector<std::pair<SolveRun, InputPath>> ended;
-      // Wakes at plan_end to finish the planners if a path is known by then.
+      // Wakes at plan_end to finish the planners if a path is certified by then.
       const Clock::time_point wake = planned_here                                   ? Clock::now()
                                      : finish.stopped() || Clock::now() >= plan_end ? end
                                                                                     : plan_end;
@@ -468,16 +475,17 @@ SolveResult Solve(const ClearanceChecker& checker, const SolveRequest& raw) {
         }
         out.runs.push_back(std::move(run));
       }
-      if (!out.inputs.empty() && Clock::now() >= plan_end && !finish.stopped()) {
-        finish.Cancel();
-        board.Stop();
-      }
       if (all_done && out.plan_ms == 0) out.plan_ms = MsSince(started);
       if (request.cancel.stopped() || Clock::now() >= end) break;
       if (unmerged) {
         query(all_done);
         unmerged = false;
         final_query = all_done;
+      }
+      // Past the planning share with a certified path: the planners still running return theirs.
+      if (best && Clock::now() >= plan_end && !finish.stopped()) {
+        finish.Cancel();
+        board.Stop();
       }
       if (all_done) break;
     }

@@ -311,6 +311,69 @@ TEST(SolveNoPathTest, ABudgetWithoutAPathEndsWithAResultThatSaysSo) {
   for (const SolveRun& run : result.runs) EXPECT_FALSE(run.found);
 }
 
+// Paths that cannot be certified do not end the planning: a wall thinner than OMPL's discrete
+// step seals one room from the other, so every path the planners find crosses it between samples
+// and no query certifies a way from start to goal. The first run's path arrives, and the call
+// (on_run) holds until the planning share (plan_fraction) has passed; the runs after it must
+// still start and plan, since no certified path is known. (Counting any arrived path as found,
+// the planning would stop there and the later runs would never start.)
+TEST(SolveUncertifiedTest, PathsThatCannotBeCertifiedDoNotEndThePlanning) {
+  auto scene = std::make_shared<Scene>(Scene{
+      .name = "thin-wall",
+      .space = Space::RealVector(Eigen::Vector2d(0, 0), Eigen::Vector2d(10, 10)),
+  });
+  Obstacle wall{.name = "wall",
+                .shape = Shape{.type = ShapeType::kBox, .box_size = Eigen::Vector3d(0.002, 20, 1)}};
+  wall.pose.translation() = Eigen::Vector3d(5, 5, 0);
+  scene->obstacles.push_back(wall);
+  scene->robot.push_back(
+      RobotBody{.name = "point", .shape = Shape{.type = ShapeType::kSphere, .radius = 0.01}});
+  // OMPL checks motions every 0.1 of the space's extent (1.4), the wall and robot 0.022 across.
+  constexpr double kResolution = 0.1;
+  const LocalPlanner planner(std::make_shared<const CollisionWorld>(scene),
+                             LocalPlannerOptions{.resolution = kResolution});
+  constexpr double kBudgetS = 2;
+  constexpr double kPlanFraction = 0.1;
+  const auto t0 = std::chrono::steady_clock::now();
+  SolveRequest request{.start = Eigen::Vector2d(2, 5),
+                       .goal = Eigen::Vector2d(8, 5),
+                       .budget_s = kBudgetS,
+                       .portfolio = {{.planner = PlannerType::kRRTConnect, .runs = 3}},
+                       .plan_fraction = kPlanFraction,
+                       .parallel = 1,
+                       .seed = 5,
+                       .resolution = kResolution,
+                       .plan_check = OmplMotionCheck::kDiscrete};
+  // One run at a time, on the calling thread.
+  request.start_beside = [](std::function<void()>) { return false; };
+  std::vector<SolveRun> ended;
+  request.on_run = [&](const SolveRun& run) {
+    ended.push_back(run);
+    // The first path arrives before the planning share ends; hold until it has.
+    if (ended.size() == 1) {
+      std::this_thread::sleep_until(
+          t0 + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                   std::chrono::duration<double>(2.5 * kPlanFraction * kBudgetS)));
+    }
+  };
+  const SolveResult result = Solve(planner, request);
+  ASSERT_EQ(result.runs.size(), 3u);
+  ASSERT_FALSE(ended.empty());
+  EXPECT_TRUE(ended.front().found) << ended.front().status;
+  EXPECT_FALSE(ended.front().certified);
+  for (const SolveRun& run : result.runs) {
+    SCOPED_TRACE(run.index);
+    EXPECT_NE(run.status.rfind("not started", 0), 0u) << run.status;
+    EXPECT_TRUE(run.found) << run.status;
+    EXPECT_FALSE(run.certified);
+  }
+  EXPECT_EQ(result.inputs.size(), 3u);
+  EXPECT_FALSE(result.found);
+  EXPECT_EQ(result.updates, 0);
+  EXPECT_NE(result.message.find("have no certified way from start to goal"), std::string::npos)
+      << result.message;
+}
+
 // A cancel stops every planner (a 30 s budget of optimizing planners) and the call, whether the
 // runs go on threads of their own or on the calling thread (a pool with no free thread).
 TEST_F(SolveTest, CancelStopsEveryPlanner) {
