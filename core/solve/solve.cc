@@ -45,12 +45,20 @@ double MsBetween(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double, std::milli>(b - a).count();
 }
 
-// The runs of a portfolio in the order they start: the planners that stop at their first
-// solution first (their paths arrive early, and then leave the optimizing ones the rest of the
-// time), then the optimizing ones, kinds interleaved so that each wave mixes them.
-std::vector<PlannerType> RunOrder(const std::vector<PortfolioEntry>& portfolio) {
+// The runs of a portfolio in the order they start, kinds interleaved so that each wave mixes
+// them. As a rule the planners that stop at their first solution first (their paths arrive early,
+// and then leave the optimizing ones the rest of the time), then the optimizing ones. But when
+// the optimizing runs are fewer than the runs at once (`parallel`), they start first: each keeps
+// a slot for the whole planning time, and the others run one after another in the slots left
+// (in a short budget, an optimizing run started after them would get little or no time).
+std::vector<PlannerType> RunOrder(const std::vector<PortfolioEntry>& portfolio, int parallel) {
+  int optimizing_runs = 0;
+  for (const PortfolioEntry& e : portfolio) {
+    optimizing_runs += IsOptimizingPlanner(e.planner) ? e.runs : 0;
+  }
+  const bool optimizing_first = optimizing_runs > 0 && optimizing_runs < parallel;
   std::vector<PlannerType> order;
-  for (bool optimizing : {false, true}) {
+  for (bool optimizing : {optimizing_first, !optimizing_first}) {
     std::vector<PortfolioEntry> left;
     for (const PortfolioEntry& e : portfolio) {
       if (IsOptimizingPlanner(e.planner) == optimizing) left.push_back(e);
@@ -260,7 +268,11 @@ bool PlanOne(const MotionChecker& checker, const SolveRequest& request, RunBoard
 
 std::vector<PortfolioEntry> DefaultPortfolio(int parallel, double budget_s) {
   if (budget_s < kLongSolveBudgetS) {
-    return {{.planner = PlannerType::kPRM, .runs = std::clamp(2 * parallel, 2, kMaxSolveRuns)}};
+    if (parallel < 2) return {{.planner = PlannerType::kPRM, .runs = 2}};
+    // One RRT* run, fewer than the slots: it starts first and keeps its slot (RunOrder).
+    return {
+        {.planner = PlannerType::kRRTStar, .runs = 1},
+        {.planner = PlannerType::kPRM, .runs = std::clamp(2 * parallel - 1, 1, kMaxSolveRuns - 1)}};
   }
   // RunOrder starts the PRM runs first; BIT* and RRT* share the planning time they leave.
   const int prm = std::clamp(parallel, 2, kMaxSolveRuns - 2);
@@ -350,7 +362,7 @@ SolveResult Solve(const ClearanceChecker& checker, const SolveRequest& raw) {
   // While no path is certified the planners may go on to kLastPlanShare of the budget: a path that
   // arrives then still has time to be merged and reported, and a planner slow to stop (OMPL
   // polls its termination condition between iterations) still ends before the budget does.
-  RunBoard board(RunOrder(request.portfolio), request.parallel, started, plan_end,
+  RunBoard board(RunOrder(request.portfolio, request.parallel), request.parallel, started, plan_end,
                  std::max(plan_end, at(budget * kLastPlanShare)));
   std::atomic<bool> finished{false};
   // Passes the caller's cancel on, and ends the planning time at plan_end once a path is

@@ -33,13 +33,14 @@ struct PortfolioEntry {
 };
 
 // The portfolio used when the request names none, for `parallel` runs at once and a budget of
-// `budget_s`: PRM (the paper's, without cycles), two runs per parallel slot; from a budget of
-// kLongSolveBudgetS on, one PRM run per slot (at least two) and BIT* and RRT* runs (one each
-// per two slots, at least one each), which start when the PRM runs have and share the planning
-// time those leave: PRM's runs end at their first path, and their paths may all take a poor
-// route that no merge can leave (the bench's `flat`), where an optimizing planner given the
-// rest of the time finds another. On the bench's real-size problems (docs/performance.md,
-// "Solve") PRM alone did best at 1 and 3 s, and PRM with BIT* and RRT* at 10 and 30 s.
+// `budget_s`: below kLongSolveBudgetS one RRT* run and PRM runs (the paper's, without cycles) in
+// the other slots, two per slot in all (the RRT* run starts first and keeps its slot for the
+// planning time: RunOrder in solve.cc); with one slot, two PRM runs. From kLongSolveBudgetS on,
+// one PRM run per slot (at least two) and BIT* and RRT* runs (one each per two slots, at least
+// one each), which start when the PRM runs have and share the planning time those leave. PRM's
+// runs end at their first path, and their paths may all take a poor route that no merge can
+// leave (the bench's `flat`), where an optimizing planner given the rest of the time finds
+// another. Measured on the bench's real-size problems (docs/performance.md, "Solve").
 inline constexpr double kLongSolveBudgetS = 10;
 std::vector<PortfolioEntry> DefaultPortfolio(int parallel = 2, double budget_s = 3);
 // The default share of the budget given to planning (SolveRequest::plan_fraction) once a query

@@ -147,11 +147,15 @@ TEST_F(SolveTest, TheHGraphServesQueriesAndAdditions) {
   EXPECT_LE(result.session->Query({}).objective, again.objective + 1e-9);
 }
 
-// The default portfolio runs every kind it names; from a long budget on, BIT* and RRT* beside PRM.
+// The default portfolio runs every kind it names: below a long budget one RRT* run, which starts
+// first (fewer optimizing runs than slots keep a slot each), and PRM's; from a long budget on,
+// PRM's first and then BIT* and RRT*.
 TEST_F(SolveTest, DefaultPortfolioRunsEveryKindItNames) {
   SolveRequest request = MazeRequest();
   const SolveResult result = Solve(*maze_->planner, request);
   ASSERT_TRUE(result.found) << result.message;
+  ASSERT_FALSE(result.runs.empty());
+  EXPECT_EQ(result.runs.front().planner, PlannerType::kRRTStar);
   int runs = 0;
   for (const PortfolioEntry& e : DefaultPortfolio()) {
     runs += e.runs;
@@ -165,7 +169,37 @@ TEST_F(SolveTest, DefaultPortfolioRunsEveryKindItNames) {
   for (const PortfolioEntry& e : DefaultPortfolio(2, kLongSolveBudgetS)) kinds.push_back(e.planner);
   EXPECT_EQ(kinds, (std::vector<PlannerType>{PlannerType::kPRM, PlannerType::kBITStar,
                                              PlannerType::kRRTStar}));
-  for (const PortfolioEntry& e : DefaultPortfolio()) EXPECT_EQ(e.planner, PlannerType::kPRM);
+  kinds.clear();
+  for (const PortfolioEntry& e : DefaultPortfolio()) kinds.push_back(e.planner);
+  EXPECT_EQ(kinds, (std::vector<PlannerType>{PlannerType::kRRTStar, PlannerType::kPRM}));
+  // With one slot, PRM alone (an optimizing run would wait for PRM's and get little time).
+  for (const PortfolioEntry& e : DefaultPortfolio(1)) EXPECT_EQ(e.planner, PlannerType::kPRM);
+}
+
+// Optimizing runs fewer than the slots start first; as many as the slots or more start after
+// the runs that stop at their first path. (Run indices are in the order the runs started.)
+TEST_F(SolveTest, OptimizingRunsFewerThanTheSlotsStartFirst) {
+  const auto first_started = [&](std::vector<PortfolioEntry> portfolio, int parallel) {
+    SolveRequest request = MazeRequest();
+    request.budget_s = 0.5;
+    request.portfolio = std::move(portfolio);
+    request.parallel = parallel;
+    const SolveResult result = Solve(*maze_->planner, request);
+    return result.runs.at(0).planner;
+  };
+  EXPECT_EQ(first_started({{.planner = PlannerType::kPRM, .runs = 2},
+                           {.planner = PlannerType::kBITStar, .runs = 1}},
+                          2),
+            PlannerType::kBITStar);
+  EXPECT_EQ(first_started({{.planner = PlannerType::kPRM, .runs = 2},
+                           {.planner = PlannerType::kBITStar, .runs = 1}},
+                          1),
+            PlannerType::kPRM);
+  EXPECT_EQ(first_started({{.planner = PlannerType::kPRM, .runs = 2},
+                           {.planner = PlannerType::kBITStar, .runs = 1},
+                           {.planner = PlannerType::kRRTStar, .runs = 1}},
+                          2),
+            PlannerType::kPRM);
 }
 
 TEST_F(SolveTest, BadRequestsNameTheField) {
