@@ -95,11 +95,20 @@ class RunBoard {
   }
 
   // The next run to start and its time, or false when there is none (or no time left for one).
-  bool Next(int* index, PlannerType* planner, double* time_s, double* start_ms) {
+  // `on_caller`: the merging thread plans the run itself (no worker took it) and merges nothing
+  // meanwhile, so it takes a run that stops at its first path before an optimizing one, which
+  // would hold it for the whole planning time.
+  bool Next(bool on_caller, int* index, PlannerType* planner, double* time_s, double* start_ms) {
     std::lock_guard lock(mutex_);
     const Clock::time_point now = Clock::now();
     if (ExhaustedLocked(now)) return false;
     const double left_s = std::chrono::duration<double>((found_ ? plan_end_ : last_) - now).count();
+    if (on_caller && IsOptimizingPlanner(order_[next_])) {
+      const auto first_solution =
+          std::find_if(order_.begin() + next_, order_.end(),
+                       [](PlannerType type) { return !IsOptimizingPlanner(type); });
+      if (first_solution != order_.end()) std::iter_swap(order_.begin() + next_, first_solution);
+    }
     *index = next_++;
     *planner = order_[*index];
     *start_ms = MsBetween(started_, now);
@@ -202,7 +211,7 @@ class RunBoard {
     return std::chrono::duration<double>((found_ ? plan_end_ : last_) - now).count() < kMinRunS;
   }
 
-  const std::vector<PlannerType> order_;
+  std::vector<PlannerType> order_;
   const int parallel_;
   const Clock::time_point started_;
   const Clock::time_point plan_end_;
@@ -219,14 +228,16 @@ class RunBoard {
   std::deque<std::pair<SolveRun, InputPath>> ended_;
 };
 
-// Starts the board's next run, if any, and plans it to its end. Returns whether a run started.
+// Starts the board's next run, if any, and plans it to its end (on the merging thread itself when
+// `on_caller`: RunBoard::Next). Returns whether a run started.
 bool PlanOne(const MotionChecker& checker, const SolveRequest& request, RunBoard* board,
-             const CancelToken& stop, const CancelToken& finish) {
+             const CancelToken& stop, const CancelToken& finish, bool on_caller) {
   int index = 0;
   PlannerType planner = PlannerType::kPRM;
   double time_s = 0;
   double start_ms = 0;
-  if (stop.stopped() || finish.stopped() || !board->Next(&index, &planner, &time_s, &start_ms)) {
+  if (stop.stopped() || finish.stopped() ||
+      !board->Next(on_caller, &index, &planner, &time_s, &start_ms)) {
     return false;
   }
   SolveRun run{.planner = planner, .index = index, .time_s = time_s, .start_ms = start_ms};
@@ -396,7 +407,7 @@ SolveResult Solve(const ClearanceChecker& checker, const SolveRequest& raw) {
   const auto start_tasks = [&] {
     while (tasks - board.tasks_done() < request.parallel && !board.Exhausted()) {
       if (!start_beside([&] {
-            while (PlanOne(checker, request, &board, planners, finish)) {
+            while (PlanOne(checker, request, &board, planners, finish, false)) {
             }
             board.TaskDone();
           })) {
@@ -469,7 +480,7 @@ SolveResult Solve(const ClearanceChecker& checker, const SolveRequest& raw) {
       bool planned_here = false;
       if (!unmerged && tasks - board.tasks_done() < request.parallel && !board.Exhausted() &&
           !request.cancel.stopped()) {
-        planned_here = PlanOne(checker, request, &board, planners, finish);
+        planned_here = PlanOne(checker, request, &board, planners, finish, true);
         if (planned_here) ++out.runs_on_caller;
       }
       std::vector<std::pair<SolveRun, InputPath>> ended;

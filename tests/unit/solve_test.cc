@@ -261,6 +261,24 @@ TEST_F(SolveTest, APoolWithoutAFreeThreadPlansOneRunAtATimeOnTheCaller) {
   EXPECT_EQ(result.most_runs_at_once, 1);
 }
 
+// With no free thread the calling thread plans the runs itself and merges nothing meanwhile: it
+// takes the runs that stop at their first path before an optimizing one, which would hold it for
+// the whole planning time (the default's RRT* run comes first with free threads).
+TEST_F(SolveTest, TheCallerPlansFirstSolutionRunsBeforeOptimizingOnes) {
+  SolveRequest request = MazeRequest();
+  request.portfolio = {{.planner = PlannerType::kRRTStar, .runs = 1},
+                       {.planner = PlannerType::kPRM, .runs = 2}};
+  request.parallel = 2;
+  request.start_beside = [](std::function<void()>) { return false; };
+  const SolveResult result = Solve(*maze_->planner, request);
+  ASSERT_EQ(result.runs.size(), 3u);
+  EXPECT_EQ(result.runs[0].planner, PlannerType::kPRM);
+  EXPECT_EQ(result.runs[1].planner, PlannerType::kPRM);
+  EXPECT_EQ(result.runs[2].planner, PlannerType::kRRTStar);
+  EXPECT_GE(result.runs_on_caller, 1);
+  ASSERT_TRUE(result.found) << result.message;
+}
+
 // A pool of one worker beside the caller (a thread that takes a task only while it has none):
 // at most two runs at once, however many `parallel` allows, and the worker's refusals are
 // planned by the caller.
