@@ -234,12 +234,14 @@ Subcommand AddSolveCommand(CLI::App& parent) {
   app->add_option("--planner", f.planners,
                   "A planner of the portfolio and its runs, NAME[:RUNS] (repeat the flag): prm, "
                   "prm-cycles, prmstar, rrt, rrtconnect, lazyprm, rrtstar, informed-rrtstar, "
-                  "bitstar, aitstar (default: prm, two runs per --parallel slot; from a 10 s "
-                  "budget on one prm run per slot, then bitstar and rrtstar sharing the time prm "
-                  "leaves)");
+                  "bitstar, aitstar (default: below a 10 s budget one rrtstar run, started "
+                  "first, and prm runs in the other --parallel slots, two runs per slot in all, "
+                  "or two prm runs with one slot; from a 10 s budget on one prm run per slot, "
+                  "then bitstar and rrtstar sharing the time prm leaves)");
   f.fields.Add<double>(
       app, "--plan-fraction",
-      "Share of the budget in which planners run, in (0, 1] (default 0.7); the rest merges",
+      "Share of the budget in which planners run once a path is certified, in (0, 1] "
+      "(default 0.7); the rest merges",
       "plan_fraction", [](v1::SolveRequest& r, const double& v) { r.set_plan_fraction(v); });
   app->add_option("--parallel", f.parallel, "Planner runs at once (default: all cores)")
       ->capture_default_str();

@@ -29,7 +29,7 @@ constexpr double kHardStopShare = 0.05;
 // budget's end, for the query's own finish (the final search, the report).
 constexpr double kMarginShare = 0.03;
 constexpr double kMinMarginS = 0.005;
-// The latest a planner may plan while no path is known (RunBoard), as a share of the budget.
+// The latest a planner may plan while no path is certified (RunBoard), as a share of the budget.
 constexpr double kLastPlanShare = 0.9;
 // While planners run, each query's post-optimization gets at most this share of the budget, so
 // that the paths that arrive meanwhile wait little.
@@ -45,12 +45,20 @@ double MsBetween(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double, std::milli>(b - a).count();
 }
 
-// The runs of a portfolio in the order they start: the planners that stop at their first
-// solution first (their paths arrive early, and then leave the optimizing ones the rest of the
-// time), then the optimizing ones, kinds interleaved so that each wave mixes them.
-std::vector<PlannerType> RunOrder(const std::vector<PortfolioEntry>& portfolio) {
+// The runs of a portfolio in the order they start, kinds interleaved so that each wave mixes
+// them. As a rule the planners that stop at their first solution first (their paths arrive early,
+// and then leave the optimizing ones the rest of the time), then the optimizing ones. But when
+// the optimizing runs are fewer than the runs at once (`parallel`), they start first: each keeps
+// a slot for the whole planning time, and the others run one after another in the slots left
+// (in a short budget, an optimizing run started after them would get little or no time).
+std::vector<PlannerType> RunOrder(const std::vector<PortfolioEntry>& portfolio, int parallel) {
+  int optimizing_runs = 0;
+  for (const PortfolioEntry& e : portfolio) {
+    optimizing_runs += IsOptimizingPlanner(e.planner) ? e.runs : 0;
+  }
+  const bool optimizing_first = optimizing_runs > 0 && optimizing_runs < parallel;
   std::vector<PlannerType> order;
-  for (bool optimizing : {false, true}) {
+  for (bool optimizing : {optimizing_first, !optimizing_first}) {
     std::vector<PortfolioEntry> left;
     for (const PortfolioEntry& e : portfolio) {
       if (IsOptimizingPlanner(e.planner) == optimizing) left.push_back(e);
@@ -73,8 +81,9 @@ std::vector<PlannerType> RunOrder(const std::vector<PortfolioEntry>& portfolio) 
 // The planner runs, shared by the planner tasks and the merging thread. Thread safe.
 class RunBoard {
  public:
-  // Runs end by plan_end once a path is known, and by `last` (the budget's end, less the
-  // merge's margin) while none is.
+  // Runs end by plan_end once a query has certified a path (Certified), and by `last` (the
+  // budget's end, less the merge's margin) while none has: a path that fails the certified check
+  // and has no certified stretch from start to goal is no reason to stop planning.
   RunBoard(std::vector<PlannerType> order, int parallel, Clock::time_point started,
            Clock::time_point plan_end, Clock::time_point last)
       : order_(std::move(order)),
@@ -86,11 +95,20 @@ class RunBoard {
   }
 
   // The next run to start and its time, or false when there is none (or no time left for one).
-  bool Next(int* index, PlannerType* planner, double* time_s, double* start_ms) {
+  // `on_caller`: the merging thread plans the run itself (no worker took it) and merges nothing
+  // meanwhile, so it takes a run that stops at its first path before an optimizing one, which
+  // would hold it for the whole planning time.
+  bool Next(bool on_caller, int* index, PlannerType* planner, double* time_s, double* start_ms) {
     std::lock_guard lock(mutex_);
     const Clock::time_point now = Clock::now();
     if (ExhaustedLocked(now)) return false;
     const double left_s = std::chrono::duration<double>((found_ ? plan_end_ : last_) - now).count();
+    if (on_caller && IsOptimizingPlanner(order_[next_])) {
+      const auto first_solution =
+          std::find_if(order_.begin() + next_, order_.end(),
+                       [](PlannerType type) { return !IsOptimizingPlanner(type); });
+      if (first_solution != order_.end()) std::iter_swap(order_.begin() + next_, first_solution);
+    }
     *index = next_++;
     *planner = order_[*index];
     *start_ms = MsBetween(started_, now);
@@ -111,7 +129,6 @@ class RunBoard {
   void Finish(SolveRun run, InputPath path) {
     {
       std::lock_guard lock(mutex_);
-      found_ = found_ || !path.waypoints.empty();
       --running_;
       ended_.push_back({std::move(run), std::move(path)});
     }
@@ -131,6 +148,11 @@ class RunBoard {
     stopped_ = true;
   }
 
+  // A query has found a certified path from start to goal.
+  void Certified() {
+    std::lock_guard lock(mutex_);
+    found_ = true;
+  }
   bool found() const {
     std::lock_guard lock(mutex_);
     return found_;
@@ -189,13 +211,13 @@ class RunBoard {
     return std::chrono::duration<double>((found_ ? plan_end_ : last_) - now).count() < kMinRunS;
   }
 
-  const std::vector<PlannerType> order_;
+  std::vector<PlannerType> order_;
   const int parallel_;
   const Clock::time_point started_;
   const Clock::time_point plan_end_;
   const Clock::time_point last_;
   mutable std::mutex mutex_;
-  bool found_ = false;  // a run has found a path
+  bool found_ = false;  // a query has certified a path
   std::condition_variable changed_;
   int next_ = 0;
   int optimizing_left_ = 0;
@@ -206,14 +228,16 @@ class RunBoard {
   std::deque<std::pair<SolveRun, InputPath>> ended_;
 };
 
-// Starts the board's next run, if any, and plans it to its end. Returns whether a run started.
+// Starts the board's next run, if any, and plans it to its end (on the merging thread itself when
+// `on_caller`: RunBoard::Next). Returns whether a run started.
 bool PlanOne(const MotionChecker& checker, const SolveRequest& request, RunBoard* board,
-             const CancelToken& stop, const CancelToken& finish) {
+             const CancelToken& stop, const CancelToken& finish, bool on_caller) {
   int index = 0;
   PlannerType planner = PlannerType::kPRM;
   double time_s = 0;
   double start_ms = 0;
-  if (stop.stopped() || finish.stopped() || !board->Next(&index, &planner, &time_s, &start_ms)) {
+  if (stop.stopped() || finish.stopped() ||
+      !board->Next(on_caller, &index, &planner, &time_s, &start_ms)) {
     return false;
   }
   SolveRun run{.planner = planner, .index = index, .time_s = time_s, .start_ms = start_ms};
@@ -255,7 +279,11 @@ bool PlanOne(const MotionChecker& checker, const SolveRequest& request, RunBoard
 
 std::vector<PortfolioEntry> DefaultPortfolio(int parallel, double budget_s) {
   if (budget_s < kLongSolveBudgetS) {
-    return {{.planner = PlannerType::kPRM, .runs = std::clamp(2 * parallel, 2, kMaxSolveRuns)}};
+    if (parallel < 2) return {{.planner = PlannerType::kPRM, .runs = 2}};
+    // One RRT* run, fewer than the slots: it starts first and keeps its slot (RunOrder).
+    return {
+        {.planner = PlannerType::kRRTStar, .runs = 1},
+        {.planner = PlannerType::kPRM, .runs = std::clamp(2 * parallel - 1, 1, kMaxSolveRuns - 1)}};
   }
   // RunOrder starts the PRM runs first; BIT* and RRT* share the planning time they leave.
   const int prm = std::clamp(parallel, 2, kMaxSolveRuns - 2);
@@ -335,20 +363,21 @@ SolveResult Solve(const ClearanceChecker& checker, const SolveRequest& raw) {
   // The planners stop on a cancel only (each run's own time ends it within the planning time);
   // the merge also at the hard stop past the budget. A watcher passes the caller's cancel on.
   const CancelToken planners;
-  // The planning time ends at plan_end once some run has found a path (the planners still
-  // running return their best path then), or else when the first path arrives: a budget
-  // whose planning share finds nothing keeps planning rather than merging nothing.
+  // The planning time ends at plan_end once a query has certified a path (the planners still
+  // running return their best path then), or else when the first certified path is found: a
+  // budget whose planning share finds nothing certifiable keeps planning rather than merging
+  // paths that have no certified way from start to goal.
   const CancelToken finish;
   const CancelToken merging;
   merging.SetDeadline(at(budget * (1 + kHardStopShare)));
-  // While no path is known the planners may go on to kLastPlanShare of the budget: a path that
+  // While no path is certified the planners may go on to kLastPlanShare of the budget: a path that
   // arrives then still has time to be merged and reported, and a planner slow to stop (OMPL
   // polls its termination condition between iterations) still ends before the budget does.
-  RunBoard board(RunOrder(request.portfolio), request.parallel, started, plan_end,
+  RunBoard board(RunOrder(request.portfolio, request.parallel), request.parallel, started, plan_end,
                  std::max(plan_end, at(budget * kLastPlanShare)));
   std::atomic<bool> finished{false};
-  // Passes the caller's cancel on, and ends the planning time at plan_end once a path is known
-  // (also while the calling thread plans a run itself).
+  // Passes the caller's cancel on, and ends the planning time at plan_end once a path is
+  // certified (also while the calling thread plans a run itself).
   std::thread watcher([&] {
     while (!finished.load()) {
       if (request.cancel.stopped()) {
@@ -378,7 +407,7 @@ SolveResult Solve(const ClearanceChecker& checker, const SolveRequest& raw) {
   const auto start_tasks = [&] {
     while (tasks - board.tasks_done() < request.parallel && !board.Exhausted()) {
       if (!start_beside([&] {
-            while (PlanOne(checker, request, &board, planners, finish)) {
+            while (PlanOne(checker, request, &board, planners, finish, false)) {
             }
             board.TaskDone();
           })) {
@@ -424,6 +453,7 @@ SolveResult Solve(const ClearanceChecker& checker, const SolveRequest& raw) {
       // one is an update.
       const bool better = !best || measure->Better(r.quality, best->quality);
       if (better || !measure->Better(best->quality, r.quality)) best = std::move(r);
+      board.Certified();
       if (better) {
         ++out.updates;
         if (request.on_update) {
@@ -450,11 +480,11 @@ SolveResult Solve(const ClearanceChecker& checker, const SolveRequest& raw) {
       bool planned_here = false;
       if (!unmerged && tasks - board.tasks_done() < request.parallel && !board.Exhausted() &&
           !request.cancel.stopped()) {
-        planned_here = PlanOne(checker, request, &board, planners, finish);
+        planned_here = PlanOne(checker, request, &board, planners, finish, true);
         if (planned_here) ++out.runs_on_caller;
       }
       std::vector<std::pair<SolveRun, InputPath>> ended;
-      // Wakes at plan_end to finish the planners if a path is known by then.
+      // Wakes at plan_end to finish the planners if a path is certified by then.
       const Clock::time_point wake = planned_here                                   ? Clock::now()
                                      : finish.stopped() || Clock::now() >= plan_end ? end
                                                                                     : plan_end;
@@ -468,16 +498,17 @@ SolveResult Solve(const ClearanceChecker& checker, const SolveRequest& raw) {
         }
         out.runs.push_back(std::move(run));
       }
-      if (!out.inputs.empty() && Clock::now() >= plan_end && !finish.stopped()) {
-        finish.Cancel();
-        board.Stop();
-      }
       if (all_done && out.plan_ms == 0) out.plan_ms = MsSince(started);
       if (request.cancel.stopped() || Clock::now() >= end) break;
       if (unmerged) {
         query(all_done);
         unmerged = false;
         final_query = all_done;
+      }
+      // Past the planning share with a certified path: the planners still running return theirs.
+      if (best && Clock::now() >= plan_end && !finish.stopped()) {
+        finish.Cancel();
+        board.Stop();
       }
       if (all_done) break;
     }

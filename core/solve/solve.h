@@ -33,17 +33,18 @@ struct PortfolioEntry {
 };
 
 // The portfolio used when the request names none, for `parallel` runs at once and a budget of
-// `budget_s`: PRM (the paper's, without cycles), two runs per parallel slot; from a budget of
-// kLongSolveBudgetS on, one PRM run per slot (at least two) and BIT* and RRT* runs (one each
-// per two slots, at least one each), which start when the PRM runs have and share the planning
-// time those leave: PRM's runs end at their first path, and their paths may all take a poor
-// route that no merge can leave (the bench's `flat`), where an optimizing planner given the
-// rest of the time finds another. On the bench's real-size problems (docs/performance.md,
-// "Solve") PRM alone did best at 1 and 3 s, and PRM with BIT* and RRT* at 10 and 30 s.
+// `budget_s`: below kLongSolveBudgetS one RRT* run and PRM runs (the paper's, without cycles) in
+// the other slots, two per slot in all (the RRT* run starts first and keeps its slot for the
+// planning time: RunOrder in solve.cc); with one slot, two PRM runs. From kLongSolveBudgetS on,
+// one PRM run per slot (at least two) and BIT* and RRT* runs (one each per two slots, at least
+// one each), which start when the PRM runs have and share the planning time those leave. PRM's
+// runs end at their first path, and their paths may all take a poor route that no merge can
+// leave (the bench's `flat`), where an optimizing planner given the rest of the time finds
+// another. Measured on the bench's real-size problems (docs/performance.md, "Solve").
 inline constexpr double kLongSolveBudgetS = 10;
 std::vector<PortfolioEntry> DefaultPortfolio(int parallel = 2, double budget_s = 3);
-// The default share of the budget given to planning (SolveRequest::plan_fraction) once a path
-// is known; while none is, the planners go on until one is.
+// The default share of the budget given to planning (SolveRequest::plan_fraction) once a query
+// has certified a path; while none has, the planners go on until one has.
 inline constexpr double kDefaultPlanFraction = 0.7;
 // Limits of a request (range-checked, errors naming the field).
 inline constexpr double kMinSolveBudgetS = 0.01;
@@ -90,8 +91,9 @@ struct SolveRequest {
   // Empty: DefaultPortfolio(). At most kMaxSolveRuns runs in all.
   std::vector<PortfolioEntry> portfolio;
   // Share of the budget in which planners may run, in (0, 1]; < 0: kDefaultPlanFraction. The
-  // rest (and whatever the planners leave) goes to merging their paths. When no run has found a
-  // path by then, the planners go on until the first one arrives (at most to the budget's end).
+  // rest (and whatever the planners leave) goes to merging their paths. When no query has
+  // certified a path by then (none arrived, or those that did have no certified stretch from
+  // start to goal), the planners go on until one is certified (at most to 0.9 of the budget).
   double plan_fraction = -1;
   // Planner runs at once, at most; 0: merge.threads (all cores if that is 0). Fewer run when
   // start_beside refuses tasks (a busy pool).

@@ -47,6 +47,9 @@ struct Method {
   std::vector<PortfolioEntry> portfolio;  // empty: the default
   double plan_fraction = -1;
   PlannerType planner = PlannerType::kBITStar;  // without solve
+  // How the planners check their motions (Solve: SolveRequest::plan_check; alone: PlanRequest's).
+  OmplMotionCheck plan_check = OmplMotionCheck::kDiscrete;
+  OmplMotionCheck alone_check = OmplMotionCheck::kCertified;
 };
 
 struct Run {
@@ -70,9 +73,19 @@ std::vector<Method> AllMethods() {
       {.name = "solve-prm-bitstar", .portfolio = {{P::kPRM, 4}, {P::kBITStar, 2}}},
       {.name = "solve-mixed", .portfolio = {{P::kPRM, 2}, {P::kBITStar, 1}, {P::kRRTStar, 1}}},
       {.name = "solve-prm4-mixed", .portfolio = {{P::kPRM, 4}, {P::kBITStar, 1}, {P::kRRTStar, 1}}},
+      // One optimizing run beside PRM's: it starts first and keeps a slot (RunOrder).
+      {.name = "solve-bitstar-prm", .portfolio = {{P::kBITStar, 1}, {P::kPRM, 3}}},
+      {.name = "solve-rrtstar-prm", .portfolio = {{P::kRRTStar, 1}, {P::kPRM, 3}}},
+      {.name = "solve-bitstar-prm-cert",
+       .portfolio = {{P::kBITStar, 1}, {P::kPRM, 3}},
+       .plan_check = OmplMotionCheck::kCertified},
       {.name = "solve-f50", .plan_fraction = 0.5},
       {.name = "solve-f90", .plan_fraction = 0.9},
       {.name = "bitstar", .solve = false, .planner = P::kBITStar},
+      {.name = "bitstar-sampled",
+       .solve = false,
+       .planner = P::kBITStar,
+       .alone_check = OmplMotionCheck::kDiscrete},
       {.name = "rrtstar", .solve = false, .planner = P::kRRTStar},
       {.name = "prmstar", .solve = false, .planner = P::kPRMStar},
       {.name = "informed-rrtstar", .solve = false, .planner = P::kInformedRRTStar},
@@ -118,6 +131,7 @@ Run RunOnce(const Method& m, const Problem& p, double budget_s, uint64_t seed, i
                                        .parallel = parallel,
                                        .seed = seed,
                                        .resolution = p.resolution,
+                                       .plan_check = m.plan_check,
                                        .on_update = [&](const SolveUpdate& u) {
                                          run.curve.emplace_back(u.elapsed_ms, u.objective);
                                        }});
@@ -132,6 +146,7 @@ Run RunOnce(const Method& m, const Problem& p, double budget_s, uint64_t seed, i
                                                            .time_s = budget_s,
                                                            .seed = seed,
                                                            .resolution = p.resolution,
+                                                           .motion_check = m.alone_check,
                                                            .keep_uncertified = true});
     run.ms = MsSince(t0);
     run.found = !r.paths.empty();

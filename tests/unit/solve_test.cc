@@ -147,11 +147,15 @@ TEST_F(SolveTest, TheHGraphServesQueriesAndAdditions) {
   EXPECT_LE(result.session->Query({}).objective, again.objective + 1e-9);
 }
 
-// The default portfolio runs every kind it names; from a long budget on, BIT* and RRT* beside PRM.
+// The default portfolio runs every kind it names: below a long budget one RRT* run, which starts
+// first (fewer optimizing runs than slots keep a slot each), and PRM's; from a long budget on,
+// PRM's first and then BIT* and RRT*.
 TEST_F(SolveTest, DefaultPortfolioRunsEveryKindItNames) {
   SolveRequest request = MazeRequest();
   const SolveResult result = Solve(*maze_->planner, request);
   ASSERT_TRUE(result.found) << result.message;
+  ASSERT_FALSE(result.runs.empty());
+  EXPECT_EQ(result.runs.front().planner, PlannerType::kRRTStar);
   int runs = 0;
   for (const PortfolioEntry& e : DefaultPortfolio()) {
     runs += e.runs;
@@ -165,7 +169,37 @@ TEST_F(SolveTest, DefaultPortfolioRunsEveryKindItNames) {
   for (const PortfolioEntry& e : DefaultPortfolio(2, kLongSolveBudgetS)) kinds.push_back(e.planner);
   EXPECT_EQ(kinds, (std::vector<PlannerType>{PlannerType::kPRM, PlannerType::kBITStar,
                                              PlannerType::kRRTStar}));
-  for (const PortfolioEntry& e : DefaultPortfolio()) EXPECT_EQ(e.planner, PlannerType::kPRM);
+  kinds.clear();
+  for (const PortfolioEntry& e : DefaultPortfolio()) kinds.push_back(e.planner);
+  EXPECT_EQ(kinds, (std::vector<PlannerType>{PlannerType::kRRTStar, PlannerType::kPRM}));
+  // With one slot, PRM alone (an optimizing run would wait for PRM's and get little time).
+  for (const PortfolioEntry& e : DefaultPortfolio(1)) EXPECT_EQ(e.planner, PlannerType::kPRM);
+}
+
+// Optimizing runs fewer than the slots start first; as many as the slots or more start after
+// the runs that stop at their first path. (Run indices are in the order the runs started.)
+TEST_F(SolveTest, OptimizingRunsFewerThanTheSlotsStartFirst) {
+  const auto first_started = [&](std::vector<PortfolioEntry> portfolio, int parallel) {
+    SolveRequest request = MazeRequest();
+    request.budget_s = 0.5;
+    request.portfolio = std::move(portfolio);
+    request.parallel = parallel;
+    const SolveResult result = Solve(*maze_->planner, request);
+    return result.runs.at(0).planner;
+  };
+  EXPECT_EQ(first_started({{.planner = PlannerType::kPRM, .runs = 2},
+                           {.planner = PlannerType::kBITStar, .runs = 1}},
+                          2),
+            PlannerType::kBITStar);
+  EXPECT_EQ(first_started({{.planner = PlannerType::kPRM, .runs = 2},
+                           {.planner = PlannerType::kBITStar, .runs = 1}},
+                          1),
+            PlannerType::kPRM);
+  EXPECT_EQ(first_started({{.planner = PlannerType::kPRM, .runs = 2},
+                           {.planner = PlannerType::kBITStar, .runs = 1},
+                           {.planner = PlannerType::kRRTStar, .runs = 1}},
+                          2),
+            PlannerType::kPRM);
 }
 
 TEST_F(SolveTest, BadRequestsNameTheField) {
@@ -225,6 +259,24 @@ TEST_F(SolveTest, APoolWithoutAFreeThreadPlansOneRunAtATimeOnTheCaller) {
   EXPECT_GE(started, 1);
   EXPECT_EQ(result.runs_on_caller, started);
   EXPECT_EQ(result.most_runs_at_once, 1);
+}
+
+// With no free thread the calling thread plans the runs itself and merges nothing meanwhile: it
+// takes the runs that stop at their first path before an optimizing one, which would hold it for
+// the whole planning time (the default's RRT* run comes first with free threads).
+TEST_F(SolveTest, TheCallerPlansFirstSolutionRunsBeforeOptimizingOnes) {
+  SolveRequest request = MazeRequest();
+  request.portfolio = {{.planner = PlannerType::kRRTStar, .runs = 1},
+                       {.planner = PlannerType::kPRM, .runs = 2}};
+  request.parallel = 2;
+  request.start_beside = [](std::function<void()>) { return false; };
+  const SolveResult result = Solve(*maze_->planner, request);
+  ASSERT_EQ(result.runs.size(), 3u);
+  EXPECT_EQ(result.runs[0].planner, PlannerType::kPRM);
+  EXPECT_EQ(result.runs[1].planner, PlannerType::kPRM);
+  EXPECT_EQ(result.runs[2].planner, PlannerType::kRRTStar);
+  EXPECT_GE(result.runs_on_caller, 1);
+  ASSERT_TRUE(result.found) << result.message;
 }
 
 // A pool of one worker beside the caller (a thread that takes a task only while it has none):
@@ -309,6 +361,69 @@ TEST(SolveNoPathTest, ABudgetWithoutAPathEndsWithAResultThatSaysSo) {
   EXPECT_NE(result.message.find("no path found in 0.3 s"), std::string::npos) << result.message;
   EXPECT_EQ(result.runs.size(), 3u);
   for (const SolveRun& run : result.runs) EXPECT_FALSE(run.found);
+}
+
+// Paths that cannot be certified do not end the planning: a wall thinner than OMPL's discrete
+// step seals one room from the other, so every path the planners find crosses it between samples
+// and no query certifies a way from start to goal. The first run's path arrives, and the call
+// (on_run) holds until the planning share (plan_fraction) has passed; the runs after it must
+// still start and plan, since no certified path is known. (Counting any arrived path as found,
+// the planning would stop there and the later runs would never start.)
+TEST(SolveUncertifiedTest, PathsThatCannotBeCertifiedDoNotEndThePlanning) {
+  auto scene = std::make_shared<Scene>(Scene{
+      .name = "thin-wall",
+      .space = Space::RealVector(Eigen::Vector2d(0, 0), Eigen::Vector2d(10, 10)),
+  });
+  Obstacle wall{.name = "wall",
+                .shape = Shape{.type = ShapeType::kBox, .box_size = Eigen::Vector3d(0.002, 20, 1)}};
+  wall.pose.translation() = Eigen::Vector3d(5, 5, 0);
+  scene->obstacles.push_back(wall);
+  scene->robot.push_back(
+      RobotBody{.name = "point", .shape = Shape{.type = ShapeType::kSphere, .radius = 0.01}});
+  // OMPL checks motions every 0.1 of the space's extent (1.4), the wall and robot 0.022 across.
+  constexpr double kResolution = 0.1;
+  const LocalPlanner planner(std::make_shared<const CollisionWorld>(scene),
+                             LocalPlannerOptions{.resolution = kResolution});
+  constexpr double kBudgetS = 2;
+  constexpr double kPlanFraction = 0.1;
+  const auto t0 = std::chrono::steady_clock::now();
+  SolveRequest request{.start = Eigen::Vector2d(2, 5),
+                       .goal = Eigen::Vector2d(8, 5),
+                       .budget_s = kBudgetS,
+                       .portfolio = {{.planner = PlannerType::kRRTConnect, .runs = 3}},
+                       .plan_fraction = kPlanFraction,
+                       .parallel = 1,
+                       .seed = 5,
+                       .resolution = kResolution,
+                       .plan_check = OmplMotionCheck::kDiscrete};
+  // One run at a time, on the calling thread.
+  request.start_beside = [](std::function<void()>) { return false; };
+  std::vector<SolveRun> ended;
+  request.on_run = [&](const SolveRun& run) {
+    ended.push_back(run);
+    // The first path arrives before the planning share ends; hold until it has.
+    if (ended.size() == 1) {
+      std::this_thread::sleep_until(
+          t0 + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                   std::chrono::duration<double>(2.5 * kPlanFraction * kBudgetS)));
+    }
+  };
+  const SolveResult result = Solve(planner, request);
+  ASSERT_EQ(result.runs.size(), 3u);
+  ASSERT_FALSE(ended.empty());
+  EXPECT_TRUE(ended.front().found) << ended.front().status;
+  EXPECT_FALSE(ended.front().certified);
+  for (const SolveRun& run : result.runs) {
+    SCOPED_TRACE(run.index);
+    EXPECT_NE(run.status.rfind("not started", 0), 0u) << run.status;
+    EXPECT_TRUE(run.found) << run.status;
+    EXPECT_FALSE(run.certified);
+  }
+  EXPECT_EQ(result.inputs.size(), 3u);
+  EXPECT_FALSE(result.found);
+  EXPECT_EQ(result.updates, 0);
+  EXPECT_NE(result.message.find("have no certified way from start to goal"), std::string::npos)
+      << result.message;
 }
 
 // A cancel stops every planner (a 30 s budget of optimizing planners) and the call, whether the
