@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <queue>
 
 #include "core/common/error.h"
@@ -22,6 +23,11 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kThresholdBracket = 1.02;
 constexpr int kMaxThresholdTests = 12;
 constexpr double kFirstCapDivisor = 16;
+// LazySP (LazyShortestPath): the most edges of a path checked at once, and the entries its
+// searches may push in all (plus 16 per edge) before lazy weighted A* takes over (about 0.1-0.3 s
+// of searching; a post-optimization round's search pushes about 10^4-10^6).
+constexpr int kMaxBatch = 64;
+constexpr int64_t kMaxPushes = 4'000'000;
 
 // One entry of the lazy open list: `node` reached through `edge` from a settled node whose value
 // is `parent_value`; `key` is the entry's value (kSum: cost so far plus cost to go; widest:
@@ -298,38 +304,72 @@ class LazyShortestPath {
   LazyShortestPath(const LazyShortestPath&) = delete;
   LazyShortestPath& operator=(const LazyShortestPath&) = delete;
 
-  SearchResult Run() {
+  // The path, or nullopt once the searches have cost more than kMaxPushes entries (many motions
+  // found in collision on a large H-Graph, each a search of its own): lazy weighted A* then
+  // finishes the search from what the checks have found so far (the same answer).
+  std::optional<SearchResult> Run() {
     const int m = graph_.num_edges();
     cost_.resize(m);
     for (int e = 0; e < m; ++e) cost_[e] = CostOf(e);
+    const int64_t max_pushes = kMaxPushes + 16 * static_cast<int64_t>(m);
+    SearchResult path = Shortest();
+    size_t next = 0;  // where the path's edges not yet known to be settled begin
+    int batch = 1;
     for (;;) {
-      SearchResult path = Shortest();
       if (!path.found) return path;
+      if (pushes_ > max_pushes) return std::nullopt;
       // The costs are kept between searches and refreshed for the evaluated edges; a check
       // only ever raises what is known of an edge (never looser), so a kept cost is still a lower
       // bound. An edge of the path whose cost rose all the same is refreshed and the search runs
       // again.
       bool stale = false;
-      for (int e : path.edges) {
+      for (size_t k = next; k < path.edges.size(); ++k) {
+        const int e = path.edges[k];
         const double fresh = CostOf(e);
         stale = stale || fresh != cost_[e];
         cost_[e] = fresh;
       }
-      if (stale) continue;
-      // The first edge of the path that is not settled (LazySP's forward selector), alone: a
-      // batch of the path's next ones checks more (on the real-size problems 6-12% more
-      // collision checks with 8), as the first often fails and ends the path; a check's own
-      // samples keep a second thread busy (EdgeCheckRequest::threads).
-      const auto first = std::find_if(path.edges.begin(), path.edges.end(), [&](int e) {
+      if (stale) {
+        path = Shortest();
+        next = 0;
+        continue;
+      }
+      // The path's first edges that are not settled (LazySP's forward selector): one, and
+      // twice as many after each check that left every cost as it was (the path is then still
+      // the shortest, and the next ones are checked without a search). A batch of the path's
+      // next 8 each time checks more (on the real-size problems 6-12% more collision checks),
+      // as the first often fails and ends the path; a check's own samples keep a second thread
+      // busy (EdgeCheckRequest::threads). A long valid input takes few searches.
+      std::vector<int> edges;
+      size_t first = path.edges.size();  // where the first of them lies on the path
+      for (; next < path.edges.size() && static_cast<int>(edges.size()) < batch; ++next) {
+        const int e = path.edges[next];
         const SearchEdge s = see_(e);
-        return !exact_(e) && s.floor != s.value;
-      });
-      if (first == path.edges.end()) return path;
-      evaluate_({*first}, {target_});
-      cost_[*first] = CostOf(*first);
+        if (exact_(e) || s.floor == s.value) continue;
+        if (edges.empty()) first = next;
+        edges.push_back(e);
+      }
+      if (edges.empty()) return path;
+      std::vector<int> sorted = edges;
+      std::sort(sorted.begin(), sorted.end());
+      evaluate_(sorted, std::vector<double>(sorted.size(), target_));
       if (stats_ != nullptr) {
         ++stats_->evaluations;
-        ++stats_->edges_evaluated;
+        stats_->edges_evaluated += static_cast<int64_t>(sorted.size());
+      }
+      bool rose = false;
+      for (int e : edges) {
+        const double fresh = CostOf(e);
+        rose = rose || fresh != cost_[e];
+        cost_[e] = fresh;
+      }
+      if (rose) {
+        path = Shortest();
+        next = 0;
+        batch = 1;
+      } else {
+        next = first;  // settled now (looked at again in passing), or tighter: checked again
+        batch = std::min(2 * batch, kMaxBatch);
       }
     }
   }
@@ -362,6 +402,7 @@ class LazyShortestPath {
     heap_.clear();
     const Worse worse;
     const auto push = [&](const LazyEntry& entry) {
+      ++pushes_;
       heap_.push_back(entry);
       std::push_heap(heap_.begin(), heap_.end(), worse);
     };
@@ -396,6 +437,7 @@ class LazyShortestPath {
   const std::vector<double>* cost_to_go_;
   const double target_;
   LazySearchStats* stats_;
+  int64_t pushes_ = 0;
   std::vector<double> cost_;   // per edge
   std::vector<double> value_;  // per node: the key of its best entry so far
   std::vector<int> via_;
@@ -414,9 +456,10 @@ SearchResult SearchLazily(const HGraph& graph, const Measure& measure, const Sea
   batch = std::max(1, batch);
   const double nan = std::numeric_limits<double>::quiet_NaN();
   if (measure.combine() == Measure::Combine::kSum && !measure.needs_clearance()) {
-    return LazyShortestPath(graph, see, exact, evaluate, cost_to_go, measure.clearance_target(),
-                            stats)
-        .Run();
+    std::optional<SearchResult> found =
+        LazyShortestPath(graph, see, exact, evaluate, cost_to_go, measure.clearance_target(), stats)
+            .Run();
+    if (found) return *std::move(found);
   }
   if (measure.combine() == Measure::Combine::kSum) {
     return LazySearch<false>(graph, see, exact, evaluate, cost_to_go, nullptr, kInf,

@@ -331,6 +331,43 @@ TEST(SearchTest, LazySumSearchChecksOnlyEdgesOfShorterRoutes) {
   EXPECT_EQ(graph.edge(into_dead_end).report.state, EdgeState::kUnchecked);
 }
 
+// A long input whose edges are all valid is checked in growing batches along one search's path
+// (each check leaves the path the shortest), not one search per edge: a 20,000-edge input takes
+// a few hundred evaluations, and every edge is checked once.
+TEST(SearchTest, LazySumSearchChecksALongValidInputInGrowingBatches) {
+  const Space space = Space::RealVector(Eigen::Vector2d(0, 0), Eigen::Vector2d(20000, 10));
+  InputPath input;
+  for (int i = 0; i <= 20000; ++i) input.waypoints.push_back(P(i, i % 2 == 0 ? 0 : 1));
+  HGraph graph(space, {input}, 0);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const SearchEdgeFn see = [&](int e) {
+    const double length = graph.edge(e).report.length;
+    const bool valid = graph.edge(e).report.state == EdgeState::kValid;
+    return SearchEdge{.value = length, .length = length, .floor = valid ? length : nan};
+  };
+  for (int e = 0; e < graph.num_edges(); ++e) {
+    HEdge& edge = graph.mutable_edge(e);
+    edge.report.length = space.Distance(graph.node(edge.u).q, graph.node(edge.v).q);
+  }
+  const ExactFn exact = [&](int e) { return graph.edge(e).report.state != EdgeState::kUnchecked; };
+  int64_t checked = 0;
+  const EvaluateFn evaluate = [&](const std::vector<int>& edges, const std::vector<double>&) {
+    for (int e : edges) {
+      EXPECT_EQ(graph.edge(e).report.state, EdgeState::kUnchecked) << "edge " << e;
+      graph.mutable_edge(e).report.state = EdgeState::kValid;
+      ++checked;
+    }
+  };
+  const auto measure = Measure::Make(MeasureSpec{.type = MeasureType::kLength});
+  LazySearchStats stats;
+  const SearchResult lazy =
+      FindBestPathLazy(graph, *measure, see, exact, evaluate, nullptr, nullptr, 8, &stats);
+  ASSERT_TRUE(lazy.found);
+  EXPECT_EQ(lazy.edges, graph.path_edges(0));
+  EXPECT_EQ(checked, graph.num_edges());
+  EXPECT_LT(stats.evaluations, 1000);
+}
+
 TEST(SearchTest, InvalidEdgesAreNeverUsed) {
   const Space space = Plane();
   HGraph graph(space, {InputPath{.waypoints = {P(0, 0), P(5, 5), P(10, 10)}}}, 0);
