@@ -322,14 +322,7 @@ class LazyShortestPath {
       // only ever raises what is known of an edge (never looser), so a kept cost is still a lower
       // bound. An edge of the path whose cost rose all the same is refreshed and the search runs
       // again.
-      bool stale = false;
-      for (size_t k = next; k < path.edges.size(); ++k) {
-        const int e = path.edges[k];
-        const double fresh = CostOf(e);
-        stale = stale || fresh != cost_[e];
-        cost_[e] = fresh;
-      }
-      if (stale) {
+      if (Refresh(path.edges, next)) {
         path = Shortest();
         next = 0;
         continue;
@@ -357,13 +350,7 @@ class LazyShortestPath {
         ++stats_->evaluations;
         stats_->edges_evaluated += static_cast<int64_t>(sorted.size());
       }
-      bool rose = false;
-      for (int e : edges) {
-        const double fresh = CostOf(e);
-        rose = rose || fresh != cost_[e];
-        cost_[e] = fresh;
-      }
-      if (rose) {
+      if (Refresh(edges, 0)) {
         path = Shortest();
         next = 0;
         batch = 1;
@@ -389,6 +376,16 @@ class LazyShortestPath {
   double CostOf(int e) const {
     const double v = see_(e).value;
     return std::isnan(v) ? kInf : v;
+  }
+  // Refreshes the kept costs of edges[from...]; whether any changed.
+  bool Refresh(const std::vector<int>& edges, size_t from) {
+    bool changed = false;
+    for (size_t k = from; k < edges.size(); ++k) {
+      const double fresh = CostOf(edges[k]);
+      changed = changed || fresh != cost_[edges[k]];
+      cost_[edges[k]] = fresh;
+    }
+    return changed;
   }
 
   // A* under the kept costs; an entry is pushed only if it would come out before every entry of
