@@ -84,14 +84,19 @@ void ValidateEndpoint(const MotionChecker& checker, const Config& q, const std::
 
 // The index of the first edge the checker does not certify, or -1: the stretches between its
 // samples proven free (touching contact rejected), as a merge requires of the input edges it
-// takes, so that a path that passes here is one a merge can use whole.
-int FirstInvalidEdge(const MotionChecker& checker, const InputPath& path) {
+// takes, so that a path that passes here is one a merge can use whole. `cancel` stops it
+// (Error(kCancelled/kDeadlineExceeded)): certifying a long path on a large mesh takes hundreds of
+// milliseconds, which a Solve that stops its planners at its budget cannot wait for.
+int FirstInvalidEdge(const MotionChecker& checker, const InputPath& path,
+                     const CancelToken& cancel) {
   for (size_t k = 0; k + 1 < path.waypoints.size(); ++k) {
+    cancel.ThrowIfStopped();
     // Valid and certified, as a merge takes its inputs' edges (a profile may find a motion free
     // at every sample and still certify no cover of it).
     const EdgeReport report = checker.CheckEdge({.from = &path.waypoints[k],
                                                  .to = &path.waypoints[k + 1],
-                                                 .proof = EdgeProof::kCertificate});
+                                                 .proof = EdgeProof::kCertificate,
+                                                 .cancel = &cancel});
     if (report.state != EdgeState::kValid || !report.certified) return static_cast<int>(k);
   }
   return -1;
@@ -263,7 +268,7 @@ InputPath AcceptSolution(const MotionChecker& checker, const PlanRequest& reques
   path.waypoints.front() = start;
   path.waypoints.back() = goal;
   if (path.waypoints.size() == 1) path.waypoints.push_back(goal);
-  const int bad = FirstInvalidEdge(checker, path);
+  const int bad = FirstInvalidEdge(checker, path, request.cancel);
   attempt->certified = bad < 0;
   if (bad >= 0) {
     attempt->invalid_edge = bad;

@@ -443,6 +443,42 @@ TEST_F(PlanTest, ConcurrentRunsSearchInParallel) {
   EXPECT_EQ(first_result.paths.size(), 1u);
 }
 
+// A checker that answers as `inner` does, and cancels `token` when it is asked for a certificate
+// (with OMPL's discrete check, the certificates of the planner's path after its search).
+class CancelOnCertificate final : public MotionChecker {
+ public:
+  CancelOnCertificate(const MotionChecker& inner, CancelToken token)
+      : inner_(inner), token_(std::move(token)) {}
+  const Space& space() const override { return inner_.space(); }
+  EdgeReport CheckEdge(const EdgeCheckRequest& request) const override {
+    if (request.proof == EdgeProof::kCertificate) token_.Cancel();
+    return inner_.CheckEdge(request);
+  }
+  bool IsValid(const Config& q) const override { return inner_.IsValid(q); }
+  double Clearance(const Config& q) const override { return inner_.Clearance(q); }
+  int64_t total_collision_checks() const override { return inner_.total_collision_checks(); }
+  int64_t total_distance_queries() const override { return inner_.total_distance_queries(); }
+
+ private:
+  const MotionChecker& inner_;
+  CancelToken token_;
+};
+
+// The certificates of a planner's path stop with the request's cancel token, as its search does
+// (a Solve's planners end at its budget, not after certifying a long path on a large mesh).
+TEST_F(PlanTest, CertifyingAPathStopsWhenTheRunIsCancelled) {
+  PlanRequest request = MazeRequest(*maze_, PlannerType::kRRTConnect, 51);
+  request.count = 1;
+  request.motion_check = OmplMotionCheck::kDiscrete;
+  const CancelOnCertificate checker(*maze_->planner, request.cancel);
+  try {
+    const PlanResult result = PlanPaths(checker, request);
+    FAIL() << "the run went on past its cancel: " << result.paths.size() << " paths";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kCancelled) << e.what();
+  }
+}
+
 // Seeds stay reproducible when runs overlap: each run's samplers are drawn under the lock.
 TEST_F(PlanTest, SameSeedSamePathsWhenRunsOverlap) {
   const PlanRequest a = MazeRequest(*maze_, PlannerType::kRRTConnect, 31);
