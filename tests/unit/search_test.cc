@@ -368,6 +368,65 @@ TEST(SearchTest, LazySumSearchChecksALongValidInputInGrowingBatches) {
   EXPECT_LT(stats.evaluations, 1000);
 }
 
+// On a large H-Graph (4000 nodes) where 40% of the bridges are in collision, each one found
+// costing a search of its own, the lazy sum search returns the eager search's path over the
+// edges that are valid.
+TEST(SearchTest, LazySumSearchWithManyMotionsInCollisionFindsTheEagerPath) {
+  const Space space = Plane();
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> coord(0, 10), coin(0, 1);
+  HGraph graph(space, {InputPath{.waypoints = {P(0, 0), P(0, 10), P(10, 10)}}}, 0);
+  for (int e : graph.path_edges(0)) SetReport(graph, space, e, {1, 1});
+  const int inputs = graph.num_edges();
+  for (int k = 0; k < 4000; ++k) graph.AddNode(P(coord(rng), coord(rng)));
+  for (int u = 0; u < graph.num_nodes(); ++u) {
+    for (int v = u + 1; v < graph.num_nodes(); ++v) {
+      if (space.Distance(graph.node(u).q, graph.node(v).q) < 0.4) graph.AddEdge(u, v, false);
+    }
+  }
+  std::vector<char> free(graph.num_edges(), 1);
+  for (int e = inputs; e < graph.num_edges(); ++e) {
+    free[e] = coin(rng) < 0.6 ? 1 : 0;
+    HEdge& edge = graph.mutable_edge(e);
+    edge.report.length = space.Distance(graph.node(edge.u).q, graph.node(edge.v).q);
+  }
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const SearchEdgeFn see = [&](int e) {
+    const EdgeReport& report = graph.edge(e).report;
+    if (report.state == EdgeState::kInvalid) {
+      return SearchEdge{.value = nan, .length = report.length};
+    }
+    return SearchEdge{.value = report.length,
+                      .length = report.length,
+                      .floor = report.state == EdgeState::kValid ? report.length : nan};
+  };
+  const ExactFn exact = [&](int e) { return graph.edge(e).report.state != EdgeState::kUnchecked; };
+  const auto settle = [&](int e) {
+    if (free[e]) {
+      SetReport(graph, space, e, {1, 1});
+    } else {
+      graph.mutable_edge(e).report.state = EdgeState::kInvalid;
+    }
+  };
+  const EvaluateFn evaluate = [&](const std::vector<int>& edges, const std::vector<double>&) {
+    for (int e : edges) settle(e);
+  };
+  std::vector<double> to_go(graph.num_nodes());
+  for (int v = 0; v < graph.num_nodes(); ++v) {
+    to_go[v] = space.Distance(graph.node(v).q, graph.node(graph.goal()).q);
+  }
+  const auto measure = Measure::Make(MeasureSpec{.type = MeasureType::kLength});
+  LazySearchStats stats;
+  const SearchResult lazy =
+      FindBestPathLazy(graph, *measure, see, exact, evaluate, &to_go, nullptr, 8, &stats);
+  ASSERT_TRUE(lazy.found);
+  EXPECT_GT(stats.evaluations, 100) << "few motions in collision: the test would not load it";
+  for (int e = inputs; e < graph.num_edges(); ++e) settle(e);
+  const EagerBest eager = EagerBestPath(graph, MeasureSpec{});
+  ASSERT_TRUE(eager.found);
+  EXPECT_EQ(lazy.edges, eager.edges);
+}
+
 TEST(SearchTest, InvalidEdgesAreNeverUsed) {
   const Space space = Plane();
   HGraph graph(space, {InputPath{.waypoints = {P(0, 0), P(5, 5), P(10, 10)}}}, 0);
