@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "core/common/client_text.h"
 #include "core/common/error.h"
@@ -155,6 +156,19 @@ double MinKnownClearance(const EdgeBoundInput& edge) {
   return c;
 }
 
+// Inverse clearance's bound of an unchecked edge where no integral is needed: infinity for a
+// point in contact (the edge cannot be valid), 0 for an edge of no length or with an end or a
+// motion bound not known; nullopt otherwise (EdgeBound and EdgeGlance integrate).
+std::optional<double> FixedInverseClearanceBound(const EdgeBoundInput& edge) {
+  if (!(MinKnownClearance(edge) > 0)) return kInf;
+  if (edge.length <= 0) return 0.0;
+  if (!std::isfinite(edge.clearance_from) || !std::isfinite(edge.clearance_to) ||
+      !std::isfinite(edge.motion_bound)) {
+    return 0.0;
+  }
+  return std::nullopt;
+}
+
 // Calls f(t, c) for the probed points and the ceilings in order of t, interior points only, the
 // smaller value where both have one.
 template <typename F>
@@ -248,13 +262,8 @@ class InverseClearanceMeasure final : public Measure {
   double EdgeBound(const EdgeBoundInput& edge) const override {
     const double k = spec().k;
     if (k == 0) return edge.length;
-    if (!(MinKnownClearance(edge) > 0)) return kInf;  // a point in contact: cannot be valid
-    if (edge.length <= 0) return 0;
+    if (const std::optional<double> fixed = FixedInverseClearanceBound(edge)) return *fixed;
     const double d = edge.motion_bound;
-    if (!std::isfinite(edge.clearance_from) || !std::isfinite(edge.clearance_to) ||
-        !std::isfinite(d)) {
-      return 0;
-    }
     double integral = 0;
     double t0 = 0;
     double c0 = edge.clearance_from;
@@ -345,14 +354,8 @@ std::optional<double> EdgeGlance(const Measure& measure, const EdgeBoundInput& e
       !(k >= 1 && k <= 8 && k == std::floor(k))) {
     return std::nullopt;
   }
-  // As EdgeBound.
-  if (!(MinKnownClearance(edge) > 0)) return kInf;
-  if (edge.length <= 0) return 0.0;
+  if (const std::optional<double> fixed = FixedInverseClearanceBound(edge)) return fixed;
   const double d = edge.motion_bound;
-  if (!std::isfinite(edge.clearance_from) || !std::isfinite(edge.clearance_to) ||
-      !std::isfinite(d)) {
-    return 0.0;
-  }
   const int n = static_cast<int>(k);
   double sum = 0;
   double t0 = 0;

@@ -343,12 +343,11 @@ class LazyShortestPath {
         edges.push_back(e);
       }
       if (edges.empty()) return path;
-      std::vector<int> sorted = edges;
-      std::sort(sorted.begin(), sorted.end());
-      evaluate_(sorted, std::vector<double>(sorted.size(), target_));
+      std::sort(edges.begin(), edges.end());
+      evaluate_(edges, std::vector<double>(edges.size(), target_));
       if (stats_ != nullptr) {
         ++stats_->evaluations;
-        stats_->edges_evaluated += static_cast<int64_t>(sorted.size());
+        stats_->edges_evaluated += static_cast<int64_t>(edges.size());
       }
       if (Refresh(edges, 0)) {
         path = Shortest();
